@@ -1,0 +1,36 @@
+# Set-up and entry points. Both `make quick` and `make test` install what they
+# need (Debian's yade as root, the Python packages into .venv) and are idempotent.
+SHELL := /bin/bash
+VENV  := .venv
+PY    := $(VENV)/bin/python
+STAMP := $(VENV)/.installed
+
+.PHONY: setup yade venv quick paper test lint clean
+
+setup: yade venv
+
+yade:
+	@command -v yade >/dev/null || { \
+	  if [ "$$(id -u)" = 0 ]; then apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq yade; \
+	  else echo "YADE missing: run 'sudo apt-get install yade' (Debian package)"; exit 1; fi; }
+
+venv: $(STAMP)
+$(STAMP): requirements.txt
+	test -x $(PY) || python3 -m venv $(VENV)
+	$(PY) -m pip install -q --upgrade pip
+	$(PY) -m pip install -q -r requirements.txt
+	touch $(STAMP)
+
+# The quick campaign: every figure and table in results/ in about 10 minutes on 2 cores.
+quick: setup
+	$(VENV)/bin/snakemake -j2 --configfile config/quick.yaml
+
+# The paper's campaign (hours on 2 cores).
+paper: setup
+	$(VENV)/bin/snakemake -j2
+
+test: setup
+	$(PY) -m pytest -q
+
+clean:
+	rm -rf results logs benchmarks .snakemake

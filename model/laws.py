@@ -1,0 +1,124 @@
+"""Constitutive laws of the fabric-friction model (see ``shared/MODEL.md``).
+
+Pure functions of the scalar state variable ``X = A:D'/|D'|``; they broadcast
+over numpy arrays and know nothing of time integration. They are the single
+place where Eq. 2, Eq. 5 and Eq. 6 of the paper are written down: the
+integrators (``model``) and the fits (``calibrate``) both call them.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+SQRT2 = np.sqrt(2.0)
+
+
+def friction_eq2(X, X0, k1, k3, k5):
+    r"""Effective friction of Eq. 2 as a function of X.
+
+    Parameters
+    ----------
+    X : float or array_like
+        State variable ``A:D'/|D'|`` (dimensionless).
+    X0, k1, k3, k5 : float
+        Eq. 2 parameters (OUR READING defaults: 0.028, 2.7, 20, 9.0e4).
+
+    Returns
+    -------
+    mu : float or ndarray
+        ``|sigma_xy| / p``.
+
+    Notes
+    -----
+    With :math:`y = X - X_0`,
+
+    .. math::
+        \mu = \begin{cases} -k_1 y + k_3 y^3 & y < 0 \\
+                             k_1 y + k_5 y^5 & y \ge 0 \end{cases}
+
+    continuous with a kink-free value :math:`\mu(X_0) = 0`.
+    """
+    y = np.asarray(X, dtype=float) - X0
+    mu = np.where(y < 0.0, -k1 * y + k3 * y**3, k1 * y + k5 * y**5)
+    return mu if mu.ndim else float(mu)
+
+
+def friction_quadratic(X, m0, m1, m2):
+    r"""Friction law of the previous model [15]: :math:`\mu = m_0 + m_1 X + m_2 X^2`."""
+    X = np.asarray(X, dtype=float)
+    mu = m0 + m1 * X + m2 * X**2
+    return mu if mu.ndim else float(mu)
+
+
+def alpha_model1(X, a1, b1, c1, a2, b2, c2, X_c):
+    r"""Coefficients alpha1, alpha2 of Model 1 (Eq. 6, pole term OUR READING).
+
+    Parameters
+    ----------
+    X : float or array_like
+        State variable; must stay below ``X_c``.
+    a1, b1, c1, a2, b2, c2 : float
+        Linear part ``a_i + b_i X`` and pole strength ``c_i``.
+    X_c : float
+        Position of the pole (paper: 0.0827).
+
+    Returns
+    -------
+    alpha1, alpha2 : float or ndarray
+        NaN where ``X >= X_c``, where the law is undefined. Callers that
+        integrate must stop before the pole (see ``model.integrate``).
+
+    Notes
+    -----
+    .. math::
+        \alpha_i = a_i + b_i X + [X > 0]\, \frac{c_i X^4}{X_c - X}
+
+    continuous and differentiable at X = 0 (the pole term starts as X^4).
+    """
+    X = np.asarray(X, dtype=float)
+    pos = np.clip(X, 0.0, None)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        pole = np.where(X < X_c, pos**4 / (X_c - X), np.nan)
+    alpha1 = a1 + b1 * X + c1 * pole
+    alpha2 = a2 + b2 * X + c2 * pole
+    if alpha1.ndim == 0:
+        return float(alpha1), float(alpha2)
+    return alpha1, alpha2
+
+
+def alpha_model2(X, c1, c2, c3):
+    r"""Coefficients of Model 2 ([15], Eq. 5): alpha1 = c1, alpha2 = c2 + c3 X."""
+    X = np.asarray(X, dtype=float)
+    alpha1 = np.full_like(X, float(c1))
+    alpha2 = c2 + c3 * X
+    if alpha1.ndim == 0:
+        return float(alpha1), float(alpha2)
+    return alpha1, alpha2
+
+
+def steady_state_constant(alpha1, alpha2):
+    r"""Steady fabric of Eq. 4 in simple shear (gammadot > 0), constant alphas.
+
+    Returns
+    -------
+    a, b, X : float
+        ``A = [[a, b], [b, -a]]`` and ``X = sqrt(2) b``.
+
+    Notes
+    -----
+    .. math::
+        a = \frac{\alpha_1}{2 + \alpha_2^2}, \quad b = -\frac{\alpha_2 a}{\sqrt 2},
+        \quad X = -\frac{\alpha_1 \alpha_2}{2 + \alpha_2^2}
+    """
+    a = alpha1 / (2.0 + alpha2**2)
+    b = -alpha2 * a / SQRT2
+    return a, b, SQRT2 * b
+
+
+def fabric_norm(a, b):
+    """|A| = sqrt(A:A) = sqrt(2 (a^2 + b^2)) for A = [[a, b], [b, -a]]."""
+    return np.sqrt(2.0 * (np.asarray(a) ** 2 + np.asarray(b) ** 2))
+
+
+def fabric_angle_deg(a, b):
+    """Major principal direction of A in degrees, counter-clockwise from x, in [0, 180)."""
+    return np.mod(np.degrees(0.5 * np.arctan2(b, a)), 180.0)

@@ -1,0 +1,176 @@
+"""The parameter file that ``calibrate`` writes and ``model`` reads.
+
+Format (YAML, one document; every block required unless marked optional)::
+
+    format: fabric-friction-params      # fixed tag
+    version: 1
+    friction_eq2:       {X0: 0.028, k1: 2.7, k3: 20.0, k5: 90000.0}   # Eq. 2
+    friction_quadratic: {m0: 0.0, m1: -3.3, m2: 0.0}                  # law of [15]
+    model1: {a1: ..., b1: ..., c1: ..., a2: ..., b2: ..., c2: ..., X_c: 0.0827}  # Eq. 6
+    model2: {c1: ..., c2: ..., c3: ...}                               # Eq. 5
+    intervals:    # optional: {block: {name: [low, high]}} (e.g. bootstrap 95 %)
+    provenance:   # optional, free-form: cases, seeds, settings, date
+
+Every value is dimensionless. ``load_params`` rejects a missing block, a
+missing or unknown key, or a value outside ``RANGES`` with a ``ValueError``
+that names the key and its allowed range.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import yaml
+
+FORMAT_TAG = "fabric-friction-params"
+FORMAT_VERSION = 1
+
+INF = math.inf
+# Allowed open ranges (low, high) per block and key. Wide on purpose: they
+# catch typos and sign slips, not physics (the calibration decides that).
+RANGES = {
+    "friction_eq2": {"X0": (-0.5, 0.5), "k1": (0.0, 1e3), "k3": (-1e6, 1e6), "k5": (-1e12, 1e12)},
+    "friction_quadratic": {"m0": (-10.0, 10.0), "m1": (-1e3, 1e3), "m2": (-1e5, 1e5)},
+    "model1": {
+        "a1": (-1e3, 1e3), "b1": (-1e5, 1e5), "c1": (-1e9, 1e9),
+        "a2": (-1e3, 1e3), "b2": (-1e5, 1e5), "c2": (-1e9, 1e9),
+        "X_c": (0.0, 1.0),
+    },
+    "model2": {"c1": (-1e3, 1e3), "c2": (-1e3, 1e3), "c3": (-1e5, 1e5)},
+}
+
+
+@dataclass(frozen=True)
+class FrictionEq2:
+    """Eq. 2: mu(X) with y = X - X0 (see ``laws.friction_eq2``)."""
+
+    X0: float
+    k1: float
+    k3: float
+    k5: float
+
+
+@dataclass(frozen=True)
+class FrictionQuadratic:
+    """Law of [15]: mu = m0 + m1 X + m2 X^2."""
+
+    m0: float
+    m1: float
+    m2: float
+
+
+@dataclass(frozen=True)
+class Model1:
+    """Eq. 6: alpha_i = a_i + b_i X + [X>0] c_i X^4 / (X_c - X)."""
+
+    a1: float
+    b1: float
+    c1: float
+    a2: float
+    b2: float
+    c2: float
+    X_c: float
+
+
+@dataclass(frozen=True)
+class Model2:
+    """Eq. 5 ([15]): alpha1 = c1, alpha2 = c2 + c3 X."""
+
+    c1: float
+    c2: float
+    c3: float
+
+
+BLOCKS = {
+    "friction_eq2": FrictionEq2,
+    "friction_quadratic": FrictionQuadratic,
+    "model1": Model1,
+    "model2": Model2,
+}
+
+
+@dataclass(frozen=True)
+class ModelParams:
+    """Everything the continuum model needs, as read from one parameter file."""
+
+    friction_eq2: FrictionEq2
+    friction_quadratic: FrictionQuadratic
+    model1: Model1
+    model2: Model2
+    intervals: dict = field(default_factory=dict)
+    provenance: dict = field(default_factory=dict)
+
+    def to_dict(self) -> dict:
+        out = {"format": FORMAT_TAG, "version": FORMAT_VERSION}
+        for name in BLOCKS:
+            out[name] = {k: float(v) for k, v in dataclasses.asdict(getattr(self, name)).items()}
+        if self.intervals:
+            out["intervals"] = self.intervals
+        if self.provenance:
+            out["provenance"] = self.provenance
+        return out
+
+
+def _check_block(name: str, values, source: str) -> dict:
+    ranges = RANGES[name]
+    if not isinstance(values, dict):
+        raise ValueError(f"{source}: '{name}' must be a mapping of {sorted(ranges)}")
+    unknown = set(values) - set(ranges)
+    if unknown:
+        raise ValueError(f"{source}: unknown key(s) {sorted(unknown)} in '{name}'; allowed: {sorted(ranges)}")
+    out = {}
+    for key, (low, high) in ranges.items():
+        if key not in values:
+            raise ValueError(f"{source}: missing key '{name}.{key}' (allowed range ({low:g}, {high:g}))")
+        try:
+            value = float(values[key])
+        except (TypeError, ValueError):
+            raise ValueError(f"{source}: '{name}.{key}' = {values[key]!r} is not a number") from None
+        if not (math.isfinite(value) and low < value < high):
+            raise ValueError(
+                f"{source}: '{name}.{key}' = {value!r} is outside the allowed range ({low:g}, {high:g})"
+            )
+        out[key] = value
+    return out
+
+
+def params_from_dict(data: dict, source: str = "parameters") -> ModelParams:
+    """Validate a parsed parameter document and build ``ModelParams``."""
+    if not isinstance(data, dict):
+        raise ValueError(f"{source}: expected a mapping at the top level")
+    if data.get("format", FORMAT_TAG) != FORMAT_TAG:
+        raise ValueError(f"{source}: 'format' must be '{FORMAT_TAG}', got {data.get('format')!r}")
+    if int(data.get("version", FORMAT_VERSION)) != FORMAT_VERSION:
+        raise ValueError(f"{source}: 'version' must be {FORMAT_VERSION}, got {data.get('version')!r}")
+    allowed = set(BLOCKS) | {"format", "version", "intervals", "provenance"}
+    unknown = set(data) - allowed
+    if unknown:
+        raise ValueError(f"{source}: unknown top-level key(s) {sorted(unknown)}; allowed: {sorted(allowed)}")
+    blocks = {}
+    for name, cls in BLOCKS.items():
+        if name not in data:
+            raise ValueError(f"{source}: missing block '{name}' with keys {sorted(RANGES[name])}")
+        blocks[name] = cls(**_check_block(name, data[name], source))
+    return ModelParams(
+        **blocks,
+        intervals=dict(data.get("intervals") or {}),
+        provenance=dict(data.get("provenance") or {}),
+    )
+
+
+def load_params(path) -> ModelParams:
+    """Read and validate a parameter file (YAML; JSON is valid YAML too)."""
+    path = Path(path)
+    with path.open() as fh:
+        data = yaml.safe_load(fh)
+    return params_from_dict(data, source=str(path))
+
+
+def save_params(params: ModelParams, path) -> None:
+    """Write ``params`` in the documented format (round-trips through ``load_params``)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with path.open("w") as fh:
+        yaml.safe_dump(params.to_dict(), fh, sort_keys=False)
