@@ -7,6 +7,8 @@ integrators (``model``) and the fits (``calibrate``) both call them.
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 SQRT2 = np.sqrt(2.0)
@@ -74,12 +76,22 @@ def alpha_model1(X, a1, b1, c1, a2, b2, c2, X_c):
 
     continuous and differentiable at X = 0 (the pole term starts as X^4).
     """
-    X = np.asarray(X, dtype=float)
-    pos = np.clip(X, 0.0, None)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        pole = np.where(X < X_c, pos**4 / (X_c - X), np.nan)
+    if type(X) is float:
+        # Scalar path (plain floats, no numpy): the integrators call this once
+        # per right-hand-side evaluation, where numpy's overhead dominates.
+        if not X < X_c:
+            pole = math.nan
+        else:
+            pole = X**4 / (X_c - X) if X > 0.0 else 0.0
+    else:
+        X = np.asarray(X, dtype=float)
+        pos = np.clip(X, 0.0, None)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            pole = np.where(X < X_c, pos**4 / (X_c - X), np.nan)
     alpha1 = a1 + b1 * X + c1 * pole
     alpha2 = a2 + b2 * X + c2 * pole
+    if type(alpha1) is float:
+        return alpha1, alpha2
     if alpha1.ndim == 0:
         return float(alpha1), float(alpha2)
     return alpha1, alpha2
@@ -87,6 +99,8 @@ def alpha_model1(X, a1, b1, c1, a2, b2, c2, X_c):
 
 def alpha_model2(X, c1, c2, c3):
     r"""Coefficients of Model 2 ([15], Eq. 5): alpha1 = c1, alpha2 = c2 + c3 X."""
+    if type(X) is float:  # scalar path for the integrators (see alpha_model1)
+        return float(c1), c2 + c3 * X
     X = np.asarray(X, dtype=float)
     alpha1 = np.full_like(X, float(c1))
     alpha2 = c2 + c3 * X
