@@ -107,6 +107,9 @@ def steady_state(params, model="model1", sign=+1):
     hi = min(1.0, X_c * (1.0 - 1e-9)) if math.isfinite(X_c) else 1.0
     f = lambda X: X - laws.steady_state_constant(*alphas(float(X)))[2]  # noqa: E731
     grid = np.linspace(-1.0, hi, 4001)
+    if math.isfinite(X_c):  # resolve roots pressed against the pole
+        grid = np.unique(np.concatenate([grid, X_c - X_c * np.logspace(-9, -1, 161)]))
+        grid = grid[grid <= hi]
     vals = np.array([f(x) for x in grid])
     roots = []
     for i in np.nonzero(vals[:-1] * vals[1:] <= 0.0)[0]:
