@@ -37,9 +37,9 @@ METHODS = ("RK4",) + tuple(SOLVERS)
 FRICTIONS = ("eq2", "quadratic")
 
 # Chosen from results/accuracy/ode_work_precision.csv (see model/README.md).
-DEFAULT_METHOD = "DOP853"
-DEFAULT_RTOL = 1e-8
-DEFAULT_ATOL = 1e-10
+DEFAULT_METHOD = "LSODA"
+DEFAULT_RTOL = 1e-10
+DEFAULT_ATOL = 1e-12
 DEFAULT_RK4_STRAIN_STEP = 1e-2   # RK4 step in units of strain when `step` is None
 POINTS_PER_STRAIN = 200          # default report grid
 
@@ -110,7 +110,7 @@ def steady_state(params, model="model1", sign=+1):
     if math.isfinite(X_c):  # resolve roots pressed against the pole
         grid = np.unique(np.concatenate([grid, X_c - X_c * np.logspace(-9, -1, 161)]))
         grid = grid[grid <= hi]
-    vals = np.array([f(x) for x in grid])
+    vals = grid - laws.steady_state_constant(*alphas(grid))[2]  # vectorised f on the grid
     roots = []
     for i in np.nonzero(vals[:-1] * vals[1:] <= 0.0)[0]:
         if vals[i] == 0.0:

@@ -8,7 +8,7 @@ from model.cli import main
 def test_simulate_runs_on_documented_defaults_and_says_so(tmp_path, capsys):
     assert main(["simulate", "--out", str(tmp_path)]) == 0
     out = capsys.readouterr().out
-    assert "built-in defaults" in out and "X_c=0.0827" in out and "DOP853" in out
+    assert "built-in defaults" in out and "X_c=0.0827" in out and "LSODA" in out
     tab = pd.read_csv(tmp_path / "heaviside.csv")
     assert set(tab.model) == {"model1", "model2"} and tab.notna().all().all()
     assert (tmp_path / "heaviside.png").stat().st_size > 10_000
