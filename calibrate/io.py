@@ -1,0 +1,264 @@
+r"""Read and validate the DEM time series (DESIGN.md's contract).
+
+A *case directory* ``results/dem/<case>/`` holds ``preshear.csv``,
+``heaviside.csv``, ``sinusoidal.csv`` and JSON sidecars. Its name encodes
+pressure, inertial number and seed (``p<P>_I<I>_s<seed>``); cases that differ
+only by the seed form one *ensemble*.
+
+Everything is checked here, at the entrance, and every problem raises
+:class:`DEMInputError` naming the file and what is wrong: a missing file or
+column, a NaN or infinity in a column the calibration uses, too few samples,
+times that do not increase, a reversal file without a reversal, and a pre-shear
+that never reached steady state. Nothing downstream re-checks.
+
+Only contract columns are read; columns beyond the contract are ignored.
+"""
+from __future__ import annotations
+
+import json
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+#: The columns every run must carry (DESIGN.md), in order.
+CONTRACT_COLUMNS = (
+    "t", "strain", "gammadot", "U_top", "U_bottom", "gap", "A_xx", "A_xy", "n_contacts",
+    "sigma_xy", "p", "mu", "sigma_xy_bulk", "p_bulk", "phi", "Z", "inertial_number",
+)
+#: The columns the calibration computes with: they must be finite in every row.
+USED_COLUMNS = ("t", "strain", "gammadot", "A_xx", "A_xy", "sigma_xy", "p", "mu")
+REVERSAL_PROTOCOLS = ("heaviside", "sinusoidal")
+
+MIN_SAMPLES = 50            # rows per file
+STEADY_WINDOW = 0.3         # last fraction of the pre-shear strain judged for steadiness
+STEADY_REL_TOL = 0.1        # allowed drift across that window, relative to the level
+STEADY_SE_FACTOR = 4.0      # ... or this many standard errors of the drift, if larger
+
+CASE_RE = re.compile(r"^(?P<group>.+)_s(?P<seed>[0-9A-Za-z]+)$")
+
+
+class DEMInputError(ValueError):
+    """A DEM file cannot be calibrated on; the message names the file and the problem."""
+
+
+@dataclass
+class Run:
+    """One validated DEM run (one CSV).
+
+    Attributes
+    ----------
+    path : Path
+    case : str
+        Case directory name.
+    group : str
+        Ensemble key (the case name without its seed).
+    seed : str
+    protocol : str
+        ``preshear``, ``heaviside`` or ``sinusoidal``.
+    data : pandas.DataFrame
+        The contract columns, rows in time order.
+    meta : dict
+        The JSON sidecar (empty if absent).
+    """
+
+    path: Path
+    case: str
+    group: str
+    seed: str
+    protocol: str
+    data: pd.DataFrame
+    meta: dict = field(default_factory=dict)
+
+    @property
+    def label(self) -> str:
+        return f"{self.case}/{self.protocol}"
+
+
+@dataclass
+class Case:
+    """The runs of one case directory (one seed)."""
+
+    path: Path
+    name: str
+    group: str
+    seed: str
+    preshear: Run
+    runs: dict  # protocol -> Run
+
+
+def split_case_name(name: str):
+    """``p1e5_I0.001_s3`` -> (``p1e5_I0.001``, ``3``); a name without ``_s<seed>`` is its own group."""
+    m = CASE_RE.match(name)
+    if m:
+        return m.group("group"), m.group("seed")
+    return name, name
+
+
+def read_run(path, protocol: str, min_samples: int = MIN_SAMPLES) -> Run:
+    """Read one CSV of the contract and check it.
+
+    Parameters
+    ----------
+    path : str or Path
+        ``<case>/<protocol>.csv``.
+    protocol : str
+    min_samples : int
+        Fewest rows accepted.
+
+    Raises
+    ------
+    DEMInputError
+        Missing file or column, non-numeric or non-finite values in a used
+        column, fewer than ``min_samples`` rows, time not increasing or
+        non-positive pressure. (``read_case`` adds: a reversal run whose rate
+        never opposes the pre-shear's.)
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise DEMInputError(f"{path}: file not found (expected the {protocol} run of the case)")
+    try:
+        raw = pd.read_csv(path)
+    except Exception as exc:  # pandas raises several types for unreadable files
+        raise DEMInputError(f"{path}: not a readable CSV ({exc})") from None
+    raw.columns = [str(c).strip() for c in raw.columns]
+    missing = [c for c in CONTRACT_COLUMNS if c not in raw.columns]
+    if missing:
+        raise DEMInputError(f"{path}: missing column(s) {missing}; the contract requires {list(CONTRACT_COLUMNS)}")
+    data = raw[list(CONTRACT_COLUMNS)].copy()
+    for c in USED_COLUMNS:
+        col = pd.to_numeric(data[c], errors="coerce")
+        bad = ~np.isfinite(col.to_numpy(dtype=float))
+        if bad.any():
+            rows = np.nonzero(bad)[0]
+            raise DEMInputError(
+                f"{path}: column '{c}' has {bad.sum()} NaN/infinite/non-numeric value(s), "
+                f"first at data row {rows[0] + 1}; refusing to fit on it"
+            )
+        data[c] = col.astype(float)
+    if len(data) < min_samples:
+        raise DEMInputError(f"{path}: only {len(data)} samples, at least {min_samples} are needed")
+    if np.any(np.diff(data["t"].to_numpy()) <= 0):
+        k = int(np.argmax(np.diff(data["t"].to_numpy()) <= 0))
+        raise DEMInputError(f"{path}: column 't' does not increase strictly (row {k + 2})")
+    if np.any(data["p"].to_numpy() <= 0):
+        raise DEMInputError(f"{path}: column 'p' has non-positive values")
+    meta = {}
+    side = path.with_suffix(".json")
+    if side.is_file():
+        try:
+            meta = json.loads(side.read_text())
+        except json.JSONDecodeError as exc:
+            raise DEMInputError(f"{side}: invalid JSON sidecar ({exc})") from None
+    case = path.parent.name
+    group, seed = split_case_name(case)
+    return Run(path=path, case=case, group=group, seed=seed, protocol=protocol, data=data, meta=meta)
+
+
+def check_steady(run: Run, window: float = STEADY_WINDOW, rel_tol: float = STEADY_REL_TOL,
+                 se_factor: float = STEADY_SE_FACTOR) -> dict:
+    r"""Check that a pre-shear ended in steady state and return its steady values.
+
+    Rule: over the last ``window`` fraction of the run's strain, fit a straight
+    line in strain to A_xx, A_xy and mu. The drift it predicts across the
+    window must be below ``max(rel_tol * level, se_factor * SE(drift))``, with
+    ``level`` the window mean of |A| (fabric) or of mu.
+
+    Returns
+    -------
+    dict
+        Window means ``A_xx, A_xy, mu`` and their standard errors ``se_*``.
+
+    Raises
+    ------
+    DEMInputError
+        Naming the file, the quantity and its drift.
+    """
+    d = run.data
+    s = np.abs(d["strain"].to_numpy() - d["strain"].iloc[0])
+    span = s[-1]
+    if span <= 0:
+        raise DEMInputError(f"{run.path}: the strain does not advance")
+    m = s >= (1.0 - window) * span
+    if m.sum() < 10:
+        raise DEMInputError(f"{run.path}: fewer than 10 samples in the last {window:.0%} of the strain; cannot judge steady state")
+    x = s[m] - s[m].mean()
+    a, b, mu = (d[c].to_numpy()[m] for c in ("A_xx", "A_xy", "mu"))
+    level_A = float(np.mean(np.sqrt(2 * (a**2 + b**2))))
+    out = {}
+    for name, y, level in (("A_xx", a, level_A), ("A_xy", b, level_A), ("mu", mu, float(np.mean(mu)))):
+        slope, icpt = np.polyfit(x, y, 1)
+        resid = y - (slope * x + icpt)
+        sd = float(np.std(resid, ddof=2))
+        se_slope = sd / np.sqrt(np.sum(x**2))
+        width = x.max() - x.min()
+        drift = slope * width
+        tol = max(rel_tol * abs(level), se_factor * se_slope * width)
+        if abs(drift) > tol:
+            raise DEMInputError(
+                f"{run.path}: the pre-shear never reached steady state: {name} still drifts by "
+                f"{drift:+.4g} over the last {window:.0%} of the strain (tolerance {tol:.3g})"
+            )
+        out[name] = float(np.mean(y))
+        out[f"se_{name}"] = sd / np.sqrt(len(y))
+    return out
+
+
+def read_case(case_dir, protocols=REVERSAL_PROTOCOLS, min_samples: int = MIN_SAMPLES) -> Case:
+    """Read a case directory: its pre-shear (checked for steady state) and the chosen reversal runs."""
+    case_dir = Path(case_dir)
+    if not case_dir.is_dir():
+        raise DEMInputError(f"{case_dir}: case directory not found")
+    pre = read_run(case_dir / "preshear.csv", "preshear", min_samples)
+    pre.meta["steady"] = check_steady(pre)
+    runs = {p: read_run(case_dir / f"{p}.csv", p, min_samples) for p in protocols}
+    g_pre = np.sign(np.median(pre.data["gammadot"].to_numpy()))
+    for r in runs.values():
+        if not np.any(np.sign(r.data["gammadot"].to_numpy()) == -g_pre):
+            raise DEMInputError(f"{r.path}: 'gammadot' never takes the sign opposite to the pre-shear's: "
+                                f"no reversal in this {r.protocol} run")
+    group, seed = split_case_name(case_dir.name)
+    return Case(path=case_dir, name=case_dir.name, group=group, seed=seed, preshear=pre, runs=runs)
+
+
+def read_cases(case_dirs, protocols=REVERSAL_PROTOCOLS, min_samples: int = MIN_SAMPLES) -> list:
+    """Read several case directories; seeds must be distinct within a group."""
+    if not case_dirs:
+        raise DEMInputError("no case directory given")
+    cases = [read_case(c, protocols, min_samples) for c in case_dirs]
+    seen = set()
+    for c in cases:
+        key = (c.group, c.seed)
+        if key in seen:
+            raise DEMInputError(f"{c.path}: seed {c.seed} of {c.group} given twice")
+        seen.add(key)
+    return cases
+
+
+def steady_values(cases) -> dict:
+    r"""Ensemble steady state from the pre-shear tails (mean over seeds, SE from their scatter).
+
+    Returns ``A_xx, A_xy, X, mu, A_norm, theta_A`` and ``se_*`` (X = sqrt2 A_xy for
+    the positive pre-shear direction). With one seed the SE is the run's own.
+    """
+    rows = []
+    for c in cases:
+        st = c.preshear.meta["steady"]
+        g = np.sign(np.median(c.preshear.data["gammadot"].to_numpy()))
+        rows.append((st["A_xx"], st["A_xy"] * g, st["mu"], st["se_A_xx"], st["se_A_xy"], st["se_mu"]))
+    r = np.array(rows)
+    n = len(r)
+    mean = r[:, :3].mean(axis=0)
+    if n > 1:
+        se = r[:, :3].std(axis=0, ddof=1) / np.sqrt(n)
+        se = np.maximum(se, np.sqrt((r[:, 3:] ** 2).mean(axis=0) / n))
+    else:
+        se = r[0, 3:]
+    a, b, mu = mean
+    out = {"A_xx": a, "A_xy": b, "mu": mu, "se_A_xx": se[0], "se_A_xy": se[1], "se_mu": se[2],
+           "X": np.sqrt(2) * b, "se_X": np.sqrt(2) * se[1], "n_seeds": n}
+    out["A_norm"] = float(np.sqrt(2 * (a**2 + b**2)))
+    out["theta_A"] = float(np.mod(np.degrees(0.5 * np.arctan2(b, a)), 180.0))
+    return {k: float(v) for k, v in out.items()}

@@ -1,0 +1,51 @@
+r"""Route 1: back-solve Eq. 4 on the smoothed DEM fabric, then fit the laws to alpha(X) and mu(X).
+
+``run_route1`` chains ``backsolve.binned`` and the fits of ``fits``; it needs
+no integration of the model, so the bootstrap over seeds repeats it cheaply.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from . import backsolve, fits
+
+
+def friction_data(samples, settings):
+    """X and signed friction g sigma_xy/p of the kept samples, and the noise of one sample."""
+    keep = backsolve.select(samples, settings)
+    d = samples[keep]
+    X = d["X"].to_numpy()
+    mu = (d["sigma_xy_over_p"] * d["g"]).to_numpy()
+    return X, mu
+
+
+def mu_noise(samples):
+    """Per-sample friction noise: scatter of g sigma_xy/p about its strain-local mean (first differences)."""
+    sig = []
+    for _, d in samples.groupby(["case", "protocol", "piece"]):
+        v = (d["sigma_xy_over_p"] * d["g"]).to_numpy()
+        if len(v) > 3:
+            sig.append(np.diff(v) / np.sqrt(2.0))
+    s = np.concatenate(sig) if sig else np.array([0.04])
+    return max(float(1.4826 * np.median(np.abs(s - np.median(s)))), 1e-4)
+
+
+def run_route1(samples, steady, settings=backsolve.BacksolveSettings(), steady_weight=1.0, xc_margin=2e-3,
+               model1_start=None):
+    """Back-solve and fit every block.
+
+    Returns
+    -------
+    dict
+        ``bins`` (DataFrame), ``friction_eq2``, ``friction_quadratic``, ``model1``,
+        ``model2`` (``fits.FitResult``), ``sigma_mu``.
+    """
+    bins = backsolve.binned(samples, settings)
+    X, mu = friction_data(samples, settings)
+    sigma_mu = mu_noise(samples)
+    out = {"bins": bins, "sigma_mu": sigma_mu}
+    out["friction_eq2"] = fits.fit_eq2(X, mu, sigma_mu, steady, steady_weight)
+    out["friction_quadratic"] = fits.fit_quadratic(X, mu, sigma_mu, steady, steady_weight)
+    out["model1"] = fits.fit_model1(bins, steady, steady_weight, xc_margin, x0=model1_start)
+    out["model2"] = fits.fit_model2(bins, steady, steady_weight)
+    return out
