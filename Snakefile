@@ -1,0 +1,25 @@
+# Shear reversal of a dense 2D granular layer: DEM campaign -> calibration -> model.
+# `snakemake -j2` runs the paper's campaign (config/config.yaml);
+# `snakemake -j2 --configfile config/quick.yaml` the quick one.
+from snakemake.utils import min_version, validate
+
+min_version("9.0")
+
+
+configfile: "config/config.yaml"
+
+
+validate(config, "workflow/schemas/config.schema.yaml")
+
+
+include: "workflow/rules/common.smk"
+include: "workflow/rules/dem.smk"
+include: "workflow/rules/calibrate.smk"
+include: "workflow/rules/model.smk"
+include: "workflow/rules/accuracy.smk"
+
+
+rule all:
+    input:
+        all_targets(),
+    default_target: True

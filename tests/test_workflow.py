@@ -1,0 +1,91 @@
+"""The Snakemake workflow: config validation, the DAG of each preset, the SLURM profile.
+
+These run Snakemake itself (dry runs: no job executes).
+"""
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import yaml
+
+ROOT = Path(__file__).resolve().parents[1]
+SNAKEMAKE = [sys.executable, "-m", "snakemake"]
+
+
+def dry_run(*args, cwd=ROOT):
+    return subprocess.run(
+        [*SNAKEMAKE, "-n", "--quiet", "rules", *args],
+        cwd=cwd, capture_output=True, text=True, timeout=300,
+    )
+
+
+def write_config(tmp_path, preset, **changes):
+    """A copy of a preset with nested keys changed, e.g. cell={"H_over_d": 1}."""
+    config = yaml.safe_load((ROOT / "config" / f"{preset}.yaml").read_text())
+    for key, value in changes.items():
+        if isinstance(value, dict):
+            config[key].update(value)
+        else:
+            config[key] = value
+    path = tmp_path / "config.yaml"
+    path.write_text(yaml.safe_dump(config))
+    return path
+
+
+@pytest.mark.parametrize("preset", ["config", "quick", "ci"])
+def test_every_preset_builds_a_dag(preset):
+    result = dry_run("--configfile", f"config/{preset}.yaml")
+    assert result.returncode == 0, result.stderr[-3000:]
+    assert "dem_preshear" in result.stdout
+
+
+@pytest.mark.parametrize(
+    "changes, key, allowed",
+    [
+        ({"cell": {"H_over_d": 1}}, "H_over_d", "minimum of 4"),
+        ({"material": {"kappa": 1.0}}, "kappa", "minimum of 100"),
+        ({"loading": {"pressures": [-5.0]}}, "pressures", "less than or equal to the minimum of 0"),
+        ({"timestep": {"dt_over_tc": 0.9}}, "dt_over_tc", "maximum of 0.3"),
+    ],
+)
+def test_bad_config_value_stops_before_any_job_naming_key_and_range(tmp_path, changes, key, allowed):
+    config = write_config(tmp_path, "ci", **changes)
+    result = dry_run("--configfile", str(config))
+    assert result.returncode != 0
+    assert key in result.stderr and allowed in result.stderr, result.stderr[-2000:]
+
+
+def test_unknown_config_key_is_rejected(tmp_path):
+    config = write_config(tmp_path, "ci", cel={"H_over_d": 8})
+    result = dry_run("--configfile", str(config))
+    assert result.returncode != 0
+    assert "'cel'" in result.stderr
+
+
+def test_one_preshear_feeds_every_reversal():
+    result = subprocess.run(
+        [*SNAKEMAKE, "-n", "--configfile", "config/ci.yaml", "--forceall"],
+        cwd=ROOT, capture_output=True, text=True, timeout=300,
+    )
+    assert result.returncode == 0, result.stderr[-3000:]
+    ci = yaml.safe_load((ROOT / "config" / "ci.yaml").read_text())
+    n_cases = len(ci["seeds"]) * len(ci["loading"]["pressures"]) * len(ci["loading"]["inertial_numbers"])
+    counts = {}
+    for line in result.stdout.splitlines():
+        parts = line.split()
+        if len(parts) == 2 and parts[1].isdigit():
+            counts[parts[0]] = int(parts[1])
+    assert counts["dem_preshear"] == n_cases
+    assert counts["dem_reversal"] == n_cases * len(ci["protocols"])
+
+
+@pytest.mark.skipif(shutil.which("sbatch") is not None, reason="a real cluster: do not touch it from tests")
+def test_slurm_profile_plans_the_paper_campaign():
+    result = subprocess.run(
+        [*SNAKEMAKE, "-n", "--profile", "profiles/slurm", "--forceall"],
+        cwd=ROOT, capture_output=True, text=True, timeout=300,
+    )
+    assert result.returncode == 0, result.stderr[-3000:]
+    assert "dem_preshear" in result.stdout
