@@ -1,0 +1,201 @@
+r"""Reading the DEM time series of one case: the reversal, the fabric before it.
+
+A case is a directory ``<label>/`` with ``preshear.csv`` and one CSV per
+reversal protocol (``heaviside.csv``, ``sinusoidal.csv``), in the column layout
+of DESIGN.md's contract, and optional JSON sidecars ``<stage>.json``. Only the
+columns in ``USED_COLUMNS`` are read; nothing beyond the contract is needed.
+
+Conventions
+-----------
+- The reversal starts at the first sample of the reversal CSV, unless its
+  sidecar records ``reversal_time`` (and then rows before it are dropped).
+- The initial fabric ``A0`` is the mean of ``(A_xx, A_xy)`` over the pre-shear
+  samples within ``a0_window`` strain of its end (at least ``MIN_A0_SAMPLES``
+  samples): the DEM fabric just before the reversal, with its per-sample noise
+  averaged down.
+- ``steady_A`` (= |mean A|) and ``steady_mu`` (mean mu) over the same window
+  are the steady values the reversal recovers towards (by symmetry the mirrored
+  steady state has the same |A| and mu).
+- ``s_rev``: strain travelled since the reversal, the running sum of
+  ``|d strain|`` (monotone also for a sinusoidal reversal, which first keeps
+  shearing forward, stops, then turns back). It is the abscissa of every figure.
+"""
+from __future__ import annotations
+
+import json
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+CONTRACT_COLUMNS = (
+    "t", "strain", "gammadot", "U_top", "U_bottom", "gap", "A_xx", "A_xy", "n_contacts",
+    "sigma_xy", "p", "mu", "sigma_xy_bulk", "p_bulk", "phi", "Z", "inertial_number",
+)
+USED_COLUMNS = ("t", "strain", "gammadot", "A_xx", "A_xy", "mu")
+REVERSAL_PROTOCOLS = ("heaviside", "sinusoidal")
+LABEL_RE = re.compile(r"^(?P<group>p[^_]+_I[^_]+)_s(?P<seed>[^_/]+)$")
+MIN_A0_SAMPLES = 10
+A0_WINDOW = 0.1       # strain over which the pre-reversal fabric is averaged
+MIN_SAMPLES = 10
+
+
+class DEMInputError(ValueError):
+    """A DEM file is missing, malformed or breaks the time-series contract."""
+
+
+def split_label(label: str):
+    """``p1e5_I0.001_s3`` -> (``p1e5_I0.001``, ``3``): the ensemble and the seed.
+
+    A directory name that does not follow ``p<pressure>_I<inertial>_s<seed>``
+    is an ensemble of its own.
+    """
+    m = LABEL_RE.match(label)
+    return (m.group("group"), m.group("seed")) if m else (label, label)
+
+
+def read_series(path, min_samples: int = MIN_SAMPLES) -> pd.DataFrame:
+    """Read one contract CSV and check the columns this package uses.
+
+    Raises
+    ------
+    DEMInputError
+        Missing file or column, a non-finite value in a used column, fewer
+        than ``min_samples`` rows, or ``t`` not strictly increasing; the
+        message names the file and the problem.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise DEMInputError(f"{path}: file not found")
+    try:
+        raw = pd.read_csv(path)
+    except Exception as exc:  # pandas raises several types for unreadable files
+        raise DEMInputError(f"{path}: not a readable CSV ({exc})") from None
+    raw.columns = [str(c).strip() for c in raw.columns]
+    missing = [c for c in USED_COLUMNS if c not in raw.columns]
+    if missing:
+        raise DEMInputError(f"{path}: missing column(s) {missing} of the DEM contract {list(CONTRACT_COLUMNS)}")
+    data = pd.DataFrame({c: pd.to_numeric(raw[c], errors="coerce") for c in USED_COLUMNS})
+    bad = ~np.isfinite(data.to_numpy(dtype=float))
+    if bad.any():
+        r, c = np.argwhere(bad)[0]
+        raise DEMInputError(f"{path}: column '{USED_COLUMNS[c]}' is NaN, infinite or not a number at data row {r + 1}")
+    if len(data) < min_samples:
+        raise DEMInputError(f"{path}: {len(data)} samples, at least {min_samples} needed")
+    dt = np.diff(data["t"].to_numpy())
+    if np.any(dt <= 0):
+        raise DEMInputError(f"{path}: column 't' does not increase strictly (data row {int(np.argmax(dt <= 0)) + 2})")
+    return data
+
+
+def read_sidecar(path) -> dict:
+    """The JSON sidecar of a CSV (``{}`` if there is none)."""
+    side = Path(path).with_suffix(".json")
+    if not side.is_file():
+        return {}
+    try:
+        meta = json.loads(side.read_text())
+    except json.JSONDecodeError as exc:
+        raise DEMInputError(f"{side}: invalid JSON ({exc})") from None
+    if not isinstance(meta, dict):
+        raise DEMInputError(f"{side}: expected a JSON object")
+    return meta
+
+
+@dataclass
+class Reversal:
+    """One DEM reversal run, ready for the model.
+
+    Attributes
+    ----------
+    label, group, seed, protocol : str
+        Case label, its ensemble ``p.._I..``, its seed, the reversal protocol.
+    data : DataFrame
+        The used columns from the reversal start on, plus ``tau`` (time since
+        the reversal), ``s_rev`` (strain travelled since it), ``A_norm`` and
+        ``theta_A`` (degrees, [0, 180)).
+    A0 : (float, float)
+        Mean (A_xx, A_xy) of the pre-shear just before the reversal.
+    steady_A, steady_mu : float
+        |A0| and the mean mu over the same window.
+    t0, strain0 : float
+        Time and strain at which the reversal starts.
+    """
+
+    label: str
+    group: str
+    seed: str
+    protocol: str
+    path: Path
+    data: pd.DataFrame
+    A0: tuple
+    steady_A: float
+    steady_mu: float
+    t0: float
+    strain0: float
+    meta: dict = field(default_factory=dict)
+
+
+def _fabric(a, b):
+    from model import fabric_angle_deg, fabric_norm
+    return fabric_norm(a, b), fabric_angle_deg(a, b)
+
+
+def load_reversal(case_dir, protocol: str, a0_window: float = A0_WINDOW) -> Reversal:
+    """Read ``<case_dir>/preshear.csv`` and ``<case_dir>/<protocol>.csv``.
+
+    Parameters
+    ----------
+    case_dir : str or Path
+        ``results/dem/<label>``.
+    protocol : {"heaviside", "sinusoidal"}
+    a0_window : float
+        Strain window at the end of the pre-shear over which A0 is averaged.
+
+    Raises
+    ------
+    DEMInputError
+        Bad files (see ``read_series``), a reversal that never shears against
+        the pre-shear, or a sidecar reversal time outside the run.
+    """
+    case_dir = Path(case_dir)
+    if protocol not in REVERSAL_PROTOCOLS:
+        raise DEMInputError(f"{case_dir}: protocol {protocol!r} is not one of {REVERSAL_PROTOCOLS}")
+    if not (a0_window > 0):
+        raise DEMInputError(f"a0_window = {a0_window!r} must be positive")
+    pre = read_series(case_dir / "preshear.csv")
+    path = case_dir / f"{protocol}.csv"
+    rev = read_series(path)
+    meta = read_sidecar(path)
+    if "reversal_time" in meta:
+        t_rev = float(meta["reversal_time"])
+        if not (rev["t"].iloc[0] - 1e-9 * abs(t_rev) <= t_rev <= rev["t"].iloc[-1]):
+            raise DEMInputError(f"{path}: sidecar reversal_time = {t_rev} lies outside the run "
+                                f"[{rev['t'].iloc[0]}, {rev['t'].iloc[-1]}]")
+        rev = rev[rev["t"] >= t_rev - 1e-9 * max(1.0, abs(t_rev))].reset_index(drop=True)
+        if len(rev) < MIN_SAMPLES:
+            raise DEMInputError(f"{path}: fewer than {MIN_SAMPLES} samples after reversal_time = {t_rev}")
+    # the pre-shear's direction, and a check that the reversal opposes it
+    g_pre = float(np.median(pre["gammadot"].to_numpy()[-max(MIN_A0_SAMPLES, len(pre) // 10):]))
+    g_rev = rev["gammadot"].to_numpy()
+    if g_pre == 0.0 or not np.any(g_rev * g_pre < 0):
+        raise DEMInputError(f"{path}: the rate never opposes the pre-shear's (median {g_pre:.4g}): no reversal")
+    s_pre = pre["strain"].to_numpy()
+    win = s_pre >= s_pre[-1] - a0_window if g_pre > 0 else s_pre <= s_pre[-1] + a0_window
+    if win.sum() < MIN_A0_SAMPLES:
+        win = np.zeros(len(pre), bool)
+        win[-MIN_A0_SAMPLES:] = True
+    a0 = float(pre["A_xx"].to_numpy()[win].mean())
+    b0 = float(pre["A_xy"].to_numpy()[win].mean())
+    steady_A = float(_fabric(a0, b0)[0])
+    steady_mu = float(pre["mu"].to_numpy()[win].mean())
+    data = rev.copy()
+    t0, strain0 = float(data["t"].iloc[0]), float(data["strain"].iloc[0])
+    data["tau"] = data["t"] - t0
+    data["s_rev"] = np.concatenate([[0.0], np.cumsum(np.abs(np.diff(data["strain"].to_numpy())))])
+    data["A_norm"], data["theta_A"] = _fabric(data["A_xx"].to_numpy(), data["A_xy"].to_numpy())
+    group, seed = split_label(case_dir.name)
+    return Reversal(label=case_dir.name, group=group, seed=seed, protocol=protocol, path=path, data=data,
+                    A0=(a0, b0), steady_A=steady_A, steady_mu=steady_mu, t0=t0, strain0=strain0, meta=meta)
