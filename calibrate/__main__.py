@@ -1,0 +1,73 @@
+"""Command line: ``python -m calibrate --dem <case_dir> [...] --out results/calibration [options]``.
+
+Exit status 2 with a one-line message naming the file and the problem for bad
+DEM input (``DEMInputError``) or bad options.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+
+from . import backsolve, io, route2, smoothing
+from .pipeline import Settings, run
+
+
+def parser() -> argparse.ArgumentParser:
+    sd, bd, rd = smoothing.SmoothingSettings(), backsolve.BacksolveSettings(), route2.Route2Settings()
+    p = argparse.ArgumentParser(prog="python -m calibrate", description=__doc__.splitlines()[0])
+    p.add_argument("--dem", nargs="+", required=True, metavar="CASE_DIR",
+                   help="case directories results/dem/<case>/ (seeds of one pressure and I form the ensemble)")
+    p.add_argument("--out", required=True, help="output directory, e.g. results/calibration")
+    p.add_argument("--protocols", nargs="+", default=list(io.REVERSAL_PROTOCOLS), choices=io.REVERSAL_PROTOCOLS)
+    g = p.add_argument_group("smoothing (Savitzky-Golay in path strain)")
+    g.add_argument("--sg-fine-window", type=float, default=sd.fine_window, help="window (strain) after a reversal")
+    g.add_argument("--sg-coarse-window", type=float, default=sd.coarse_window, help="window (strain) elsewhere")
+    g.add_argument("--sg-fine-span", type=float, default=sd.fine_span, help="strain after a reversal using the fine window")
+    g.add_argument("--sg-order", type=int, default=sd.order)
+    g = p.add_argument_group("back-solve")
+    g.add_argument("--rate-min", type=float, default=bd.rate_min, help="drop samples with |gammadot| below this fraction of the run's median")
+    g.add_argument("--skip", type=float, default=bd.skip, help="drop samples closer than this strain after a reversal")
+    g.add_argument("--bin-width", type=float, default=bd.bin_width)
+    g.add_argument("--min-bin-samples", type=int, default=bd.min_samples)
+    g.add_argument("--cond-max", type=float, default=bd.cond_max)
+    g = p.add_argument_group("route 2 and bootstrap")
+    g.add_argument("--route2-evals", type=int, default=rd.max_evals, help="model evaluations per route-2 fit")
+    g.add_argument("--route2-rtol", type=float, default=rd.rtol)
+    g.add_argument("--route2-method", default=rd.method)
+    g.add_argument("--mu-weight", type=float, default=rd.mu_weight)
+    g.add_argument("--bootstrap", type=int, default=Settings.n_boot, help="bootstrap replicates over seeds")
+    g.add_argument("--bootstrap-evals", type=int, default=Settings.boot_evals, help="model evaluations per replicate fit")
+    g.add_argument("--seed", type=int, default=0, help="bootstrap random seed")
+    g.add_argument("--steady-weight", type=float, default=1.0)
+    g.add_argument("--min-samples", type=int, default=io.MIN_SAMPLES, help="fewest rows accepted per DEM file")
+    g.add_argument("--no-figures", action="store_true")
+    return p
+
+
+def main(argv=None) -> int:
+    argv = sys.argv[1:] if argv is None else argv
+    a = parser().parse_args(argv)
+    try:
+        settings = Settings(
+            protocols=tuple(a.protocols),
+            smoothing=smoothing.SmoothingSettings(fine_window=a.sg_fine_window, coarse_window=a.sg_coarse_window,
+                                                  fine_span=a.sg_fine_span, order=a.sg_order),
+            backsolve=backsolve.BacksolveSettings(rate_min=a.rate_min, skip=a.skip, bin_width=a.bin_width,
+                                                  min_samples=a.min_bin_samples, cond_max=a.cond_max),
+            route2=route2.Route2Settings(max_evals=a.route2_evals, rtol=a.route2_rtol, method=a.route2_method,
+                                         mu_weight=a.mu_weight, steady_weight=a.steady_weight),
+            steady_weight=a.steady_weight, n_boot=a.bootstrap, boot_evals=a.bootstrap_evals, seed=a.seed,
+            min_samples=a.min_samples, figures=not a.no_figures)
+        run(a.dem, a.out, settings, log=lambda m: print(m, file=sys.stderr, flush=True),
+            argv=["python -m calibrate", *argv])
+    except io.DEMInputError as exc:
+        print(f"calibrate: bad DEM input: {exc}", file=sys.stderr)
+        return 2
+    except ValueError as exc:
+        print(f"calibrate: {exc}", file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

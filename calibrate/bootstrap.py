@@ -1,0 +1,129 @@
+r"""Bootstrap over seeds: parameter intervals and held-out (out-of-bag) prediction scores.
+
+A replicate draws, within each ensemble (group), as many seeds as it has, with
+replacement; both routes are refitted on the drawn seeds (route 1 from scratch,
+route 2 warm-started from its full-data fit under a smaller budget). The seeds
+*not* drawn are held out: each route's replicate parameters predict their runs
+(``route2.score``). Intervals are the 2.5 and 97.5 percentiles of the replicate
+values; the held-out score of a route is the mean over replicates that held a
+seed out.
+"""
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pandas as pd
+
+from model import params_from_dict
+
+from . import route1, route2
+
+BLOCKS = ("friction_eq2", "friction_quadratic", "model1", "model2")
+
+
+def draw(cases, rng):
+    """Drawn case names (with repeats) and held-out case names of one replicate."""
+    groups = {}
+    for c in cases:
+        groups.setdefault(c.group, []).append(c.name)
+    drawn = []
+    for names in groups.values():
+        drawn += list(rng.choice(names, size=len(names), replace=True))
+    held = [c.name for c in cases if c.name not in set(drawn)]
+    return drawn, held
+
+
+def resample(samples: pd.DataFrame, drawn) -> pd.DataFrame:
+    """Samples of the drawn cases; a case drawn twice enters twice (as distinct pseudo-seeds)."""
+    parts = []
+    for k, name in enumerate(drawn):
+        d = samples[samples["case"] == name].copy()
+        d["seed"] = d["seed"].astype(str) + f"#{k}"
+        parts.append(d)
+    return pd.concat(parts, ignore_index=True)
+
+
+def params_doc(base: dict, blocks: dict) -> dict:
+    doc = dict(base)
+    for k, v in blocks.items():
+        doc[k] = dict(v)
+    return doc
+
+
+def run(cases, samples, steady_fn, replays, full, base_doc, settings, n_boot=20, seed=0, boot_evals=60,
+        log=print, edges=None):
+    """Bootstrap both routes.
+
+    Parameters
+    ----------
+    cases : list of io.Case
+    samples : DataFrame (``smoothing.smooth_cases``)
+    steady_fn : callable(list of case names) -> steady dict
+    replays : list of route2.Replay
+    full : dict
+        Full-data results: ``route1`` (dict of FitResult) and ``route2`` (dict model -> FitResult).
+    base_doc : dict
+        Parameter document with route-1 friction laws.
+    settings : dict with ``backsolve``, ``route2``, ``steady_weight``, ``xc_margin``
+    n_boot, seed, boot_evals : int
+    edges : array, optional
+        Bin edges of the full-data back-solve: the bins are re-solved per
+        replicate (route "bins", block = the bin's lower edge).
+
+    Returns
+    -------
+    values : DataFrame, one row per (replicate, route, block, parameter)
+    heldout : DataFrame, one row per (replicate, route, model) with the held-out scores
+    """
+    rng = np.random.default_rng(seed)
+    rows, held_rows = [], []
+    s2 = replace(settings["route2"], max_evals=boot_evals)
+    for k in range(n_boot):
+        drawn, held = draw(cases, rng)
+        smp = resample(samples, drawn)
+        steady = steady_fn(drawn)
+        try:
+            r1 = route1.run_route1(smp, steady, settings["backsolve"], settings["steady_weight"],
+                                   settings["xc_margin"], model1_start=full["route1"]["model1"].values)
+        except ValueError as exc:
+            log(f"bootstrap replicate {k}: route 1 failed ({exc}); replicate skipped")
+            continue
+        for block in BLOCKS:
+            for name, v in r1[block].values.items():
+                rows.append((k, "backsolve", block, name, v))
+        if edges is not None:
+            from .backsolve import binned
+            bb = binned(smp, settings["backsolve"], edges=edges)
+            for _, row in bb.iterrows():
+                key = f"{row.X_lo:.6g}"
+                rows += [(k, "bins", key, "alpha1", row.alpha1), (k, "bins", key, "alpha2", row.alpha2)]
+        doc1 = params_doc(base_doc, {b: r1[b].values for b in BLOCKS})
+        reps = [r for name in drawn for r in replays if r.case == name]
+        doc2 = dict(doc1)
+        for model in ("model1", "model2"):
+            f = route2.fit(reps, doc1, model, full["route2"][model].values, steady, r1["sigma_mu"], s2)
+            doc2[model] = f.values
+            for name, v in f.values.items():
+                rows.append((k, "curves", model, name, v))
+        held_reps = [r for r in replays if r.case in held]
+        if held_reps:
+            for route, doc in (("backsolve", doc1), ("curves", doc2)):
+                prm = params_from_dict(doc, source=f"bootstrap {k} {route}")
+                for model in ("model1", "model2"):
+                    sc = route2.score(prm, held_reps, model, settings["route2"], r1["sigma_mu"])
+                    held_rows.append({"replicate": k, "route": route, "model": model, "n_heldout_runs": len(held_reps),
+                                      **sc})
+        log(f"bootstrap replicate {k + 1}/{n_boot}: drawn {len(drawn)} seeds, held out {len(held)}")
+    values = pd.DataFrame(rows, columns=["replicate", "route", "block", "parameter", "value"])
+    heldout = pd.DataFrame(held_rows)
+    return values, heldout
+
+
+def intervals(values: pd.DataFrame, level=0.95) -> pd.DataFrame:
+    """Percentile intervals per (route, block, parameter)."""
+    q = (1 - level) / 2
+    g = values.groupby(["route", "block", "parameter"])["value"]
+    out = g.quantile(q).rename("low").to_frame().join(g.quantile(1 - q).rename("high"))
+    out["n_replicates"] = g.count()
+    return out.reset_index()

@@ -1,0 +1,124 @@
+"""Figures from our own data, as in the paper: Fig. 2a, 2b, 3a, 3b, and the fitted curves against the DEM."""
+from __future__ import annotations
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from model.laws import alpha_model1, alpha_model2, friction_eq2, friction_quadratic  # noqa: E402
+
+PROTO_COLORS = {"heaviside": "tab:blue", "sinusoidal": "tab:orange", "preshear": "tab:gray"}
+
+
+def fig2a(samples, path):
+    """sigma_xy/p against A_xy (raw samples of every seed, per protocol)."""
+    fig, ax = plt.subplots(figsize=(5, 4))
+    for proto, d in samples.groupby("protocol"):
+        ax.plot(d["b_raw"], d["sigma_xy_over_p"], ".", ms=2, alpha=0.4, color=PROTO_COLORS.get(proto), label=proto)
+    ax.set_xlabel(r"$A_{xy}$")
+    ax.set_ylabel(r"$\sigma_{xy}/p$")
+    ax.set_title("Fig. 2a: shear stress against fabric (DEM)")
+    ax.legend(markerscale=4)
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
+    plt.close(fig)
+
+
+def fig2b(X, mu, eq2: dict, quad: dict, path, nbins=30):
+    """Signed friction g sigma_xy/p against X: samples, binned means, Eq. 2 and quadratic fits."""
+    fig, ax = plt.subplots(figsize=(5, 4))
+    ax.plot(X, mu, ".", ms=2, color="0.75", label="DEM samples")
+    edges = np.linspace(np.min(X), np.max(X), nbins + 1)
+    idx = np.digitize(X, edges) - 1
+    xm, ym, ye = [], [], []
+    for k in range(nbins):
+        m = idx == k
+        if m.sum() >= 3:
+            xm.append(X[m].mean())
+            ym.append(mu[m].mean())
+            ye.append(mu[m].std(ddof=1) / np.sqrt(m.sum()))
+    ax.errorbar(xm, ym, ye, fmt="o", ms=3, color="k", label="DEM binned mean")
+    x = np.linspace(np.min(X), np.max(X), 300)
+    ax.plot(x, friction_eq2(x, **eq2), "r-", label="Eq. 2 fit")
+    ax.plot(x, friction_quadratic(x, **quad), "b--", label="quadratic law [15] fit")
+    ax.set_xlabel(r"$X = A:D'/|D'|$")
+    ax.set_ylabel(r"$\mu = \mathrm{sign}(\dot\gamma)\,\sigma_{xy}/p$")
+    ax.set_title("Fig. 2b: friction against X")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
+    plt.close(fig)
+
+
+def fig3(bins, which, m1: dict, m2: dict, path):
+    """alpha1 (which=1) or alpha2 (which=2) against X: back-solved bins and the Model 1 / Model 2 fits.
+
+    ``m1`` and ``m2`` map a route label to the block's values.
+    """
+    col = f"alpha{which}"
+    fig, ax = plt.subplots(figsize=(5.5, 4))
+    lo_col, hi_col = f"{col}_low", f"{col}_high"
+    for used, style in ((True, dict(fmt="o", color="k", label="back-solve, used bins")),
+                        (False, dict(fmt="o", mfc="none", color="0.6", label="back-solve, left out (cond./count)"))):
+        d = bins[bins["used"] == used]
+        if not len(d):
+            continue
+        if lo_col in d and np.isfinite(d[lo_col]).any():
+            err = np.vstack([d[col] - d[lo_col], d[hi_col] - d[col]]).clip(min=0)
+        else:
+            err = d[f"se_{col}"]
+        ax.errorbar(d["X_mean"], d[col], err, ms=4, capsize=2, **style)
+    xmin, xmax = float(bins["X_lo"].min()), float(bins["X_hi"].max())
+    colors = iter(["tab:red", "tab:purple", "tab:blue", "tab:cyan"])
+    for label, v in m1.items():
+        x = np.linspace(xmin, min(xmax, v["X_c"] * 0.999), 400)
+        ax.plot(x, alpha_model1(x, **v)[which - 1], "-", color=next(colors), label=f"Model 1 ({label})")
+    for label, v in m2.items():
+        x = np.linspace(xmin, xmax, 100)
+        ax.plot(x, np.broadcast_to(alpha_model2(x, **v)[which - 1], x.shape), "--", color=next(colors),
+                label=f"Model 2 ({label})")
+    used = bins[bins["used"]]
+    if len(used):
+        lo, hi = np.nanpercentile(used[col], [2, 98])
+        pad = 0.5 * (hi - lo) + 1.0
+        ax.set_ylim(lo - pad, hi + pad)
+    ax.set_xlabel(r"$X$")
+    ax.set_ylabel(rf"$\alpha_{which}$")
+    ax.set_title(f"Fig. 3{'ab'[which - 1]}: " + rf"$\alpha_{which}$ against X")
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
+    plt.close(fig)
+
+
+def fig_curves(replays, predictions: dict, path):
+    """|A|, theta_A and mu against path strain: DEM ensemble (every seed) and the models.
+
+    ``predictions`` maps a label to {replay label: (n, 3) array of a, b, signed mu}.
+    """
+    protos = sorted({r.label.split("/")[-1] for r in replays})
+    fig, axes = plt.subplots(3, len(protos), figsize=(4.5 * len(protos), 8), squeeze=False, sharex="col")
+    for j, proto in enumerate(protos):
+        reps = [r for r in replays if r.label.endswith(proto)]
+        for r in reps:
+            axes[0, j].plot(r.s, np.sqrt(2 * (r.a**2 + r.b**2)), ".", ms=2, color="0.7")
+            axes[1, j].plot(r.s, np.mod(np.degrees(0.5 * np.arctan2(r.b, r.a)), 180), ".", ms=2, color="0.7")
+            axes[2, j].plot(r.s, r.mu, ".", ms=2, color="0.7")
+        for (label, pred), style in zip(predictions.items(), ("r-", "b--", "m-.", "c:")):
+            m = pred.get(reps[0].label)
+            if m is None:
+                continue
+            axes[0, j].plot(reps[0].s, np.sqrt(2 * (m[:, 0] ** 2 + m[:, 1] ** 2)), style, label=label)
+            axes[1, j].plot(reps[0].s, np.mod(np.degrees(0.5 * np.arctan2(m[:, 1], m[:, 0])), 180), style)
+            axes[2, j].plot(reps[0].s, m[:, 2], style)
+        axes[0, j].set_title(proto)
+        axes[0, j].set_ylabel(r"$|A|$")
+        axes[1, j].set_ylabel(r"$\theta_A$ (deg)")
+        axes[2, j].set_ylabel(r"$\mathrm{sign}(\dot\gamma)\sigma_{xy}/p$")
+        axes[2, j].set_xlabel("path strain since the run start")
+        axes[0, j].legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)

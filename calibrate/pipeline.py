@@ -1,0 +1,212 @@
+"""The calibration from DEM case directories to ``results/calibration/`` (what the command line runs)."""
+from __future__ import annotations
+
+import datetime
+import math
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from model import default_params, params_from_dict, steady_state
+
+from . import backsolve, bootstrap, figures, io, route1, route2, smoothing, tables
+
+BLOCKS = ("friction_eq2", "friction_quadratic", "model1", "model2")
+
+
+@dataclass
+class Settings:
+    protocols: tuple = io.REVERSAL_PROTOCOLS
+    smoothing: smoothing.SmoothingSettings = field(default_factory=smoothing.SmoothingSettings)
+    backsolve: backsolve.BacksolveSettings = field(default_factory=backsolve.BacksolveSettings)
+    route2: route2.Route2Settings = field(default_factory=route2.Route2Settings)
+    steady_weight: float = 1.0
+    xc_margin: float = 2e-3
+    n_boot: int = 20
+    boot_evals: int = 60
+    seed: int = 0
+    min_samples: int = io.MIN_SAMPLES
+    figures: bool = True
+
+    def as_dict(self) -> dict:
+        return {"protocols": list(self.protocols), "smoothing": self.smoothing.as_dict(),
+                "backsolve": self.backsolve.as_dict(), "route2": self.route2.as_dict(),
+                "steady_weight": self.steady_weight, "xc_margin": self.xc_margin, "n_boot": self.n_boot,
+                "boot_evals": self.boot_evals, "bootstrap_seed": self.seed, "min_samples": self.min_samples}
+
+
+def _route2_start(replays, doc, model, r1_values, steady, sigma_mu, s2, xc_margin):
+    """First start with a finite score: the route-1 values, their linear part, the model defaults."""
+    cands = [r1_values]
+    if model == "model1":
+        lin = dict(r1_values, c1=-1.0, c2=1.0, X_c=max(r1_values["X_c"], -steady["X"] + xc_margin + 0.01))
+        cands += [lin, default_params().model1.__dict__]
+    else:
+        cands += [default_params().model2.__dict__]
+    for c in cands:
+        d = dict(doc)
+        d[model] = dict(c)
+        try:
+            prm = params_from_dict(d)
+        except ValueError:
+            continue
+        if math.isfinite(route2.score(prm, replays, model, s2, sigma_mu)["score"]):
+            return dict(c)
+    return dict(r1_values)
+
+
+def steady_check(doc, steady) -> dict:
+    """Steady state implied by each model block (``model.steady_state``) against the DEM's."""
+    out = {}
+    prm = params_from_dict(doc)
+    for model in ("model1", "model2"):
+        try:
+            a, b, X = steady_state(prm, model)
+            out[model] = {"A_norm": float(np.sqrt(2 * (a * a + b * b))),
+                          "theta_A": float(np.mod(np.degrees(0.5 * np.arctan2(b, a)), 180)), "X": float(X)}
+        except ValueError as exc:
+            out[model] = {"error": str(exc)}
+    return out
+
+
+def run(case_dirs, out, settings: Settings = Settings(), log=print, argv=None) -> dict:
+    """Calibrate on ``case_dirs`` and write every output under ``out``. Returns a summary dict."""
+    t0 = time.time()
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    cases = io.read_cases(case_dirs, settings.protocols, settings.min_samples)
+    by_name = {c.name: c for c in cases}
+    log(f"read {len(cases)} case(s): {', '.join(by_name)}")
+    samples = smoothing.smooth_cases(cases, settings.smoothing)
+    steady = io.steady_values(cases)
+    bs = settings.backsolve
+
+    # route 1
+    r1 = route1.run_route1(samples, steady, bs, settings.steady_weight, settings.xc_margin)
+    sigma_mu = r1["sigma_mu"]
+    doc1 = default_params().to_dict()
+    doc1.pop("provenance", None)
+    for b in BLOCKS:
+        doc1[b] = r1[b].values
+    params_from_dict(doc1, source="route-1 fit")  # range check
+    log(f"route 1 done ({time.time() - t0:.1f} s): {int(r1['bins']['used'].sum())} of {len(r1['bins'])} bins used")
+
+    # route 2
+    replays = route2.prepare(cases, samples, bs)
+    r2 = {}
+    doc2 = dict(doc1)
+    for model in ("model1", "model2"):
+        start = _route2_start(replays, doc1, model, r1[model].values, steady, sigma_mu, settings.route2,
+                              settings.xc_margin)
+        r2[model] = route2.fit(replays, doc1, model, start, steady, sigma_mu, settings.route2)
+        doc2[model] = r2[model].values
+        log(f"route 2 {model}: {r2[model].extra['evaluations']} evaluations, {r2[model].message} "
+            f"({time.time() - t0:.1f} s)")
+
+    # bootstrap (intervals and held-out scores)
+    full = {"route1": r1, "route2": r2}
+    edges = np.append(r1["bins"]["X_lo"].to_numpy(), r1["bins"]["X_hi"].iloc[-1]) if len(r1["bins"]) else None
+    values, heldout = bootstrap.run(
+        cases, samples, lambda names: io.steady_values([by_name[n] for n in names]), replays, full, doc1,
+        {"backsolve": bs, "route2": settings.route2, "steady_weight": settings.steady_weight,
+         "xc_margin": settings.xc_margin},
+        n_boot=settings.n_boot, seed=settings.seed, boot_evals=settings.boot_evals, log=log, edges=edges)
+    iv = bootstrap.intervals(values) if len(values) else pd.DataFrame(columns=["route", "block", "parameter", "low", "high"])
+    log(f"bootstrap done ({time.time() - t0:.1f} s)")
+
+    # scores: in-sample and held-out; choose the default route per model
+    quality, default_route = [], {"friction_eq2": "mu_vs_X", "friction_quadratic": "mu_vs_X"}
+    for model in ("model1", "model2"):
+        best, best_score = "backsolve", math.inf
+        for route, doc in (("backsolve", doc1), ("curves", doc2)):
+            ins = route2.score(params_from_dict(doc), replays, model, settings.route2, sigma_mu)
+            h = heldout[(heldout["route"] == route) & (heldout["model"] == model)] if len(heldout) else heldout
+            h_score = float(h["score"].replace(np.inf, 1e300).mean()) if len(h) else math.nan
+            crit = h_score if len(h) else ins["score"]
+            if crit < best_score:
+                best, best_score = route, crit
+            fr = (r1[model] if route == "backsolve" else r2[model])
+            quality.append({"model": model, "route": route, "insample_score": ins["score"],
+                            "insample_rms_A_norm": ins["rms_A_norm"], "insample_rms_theta_A": ins["rms_theta_A"],
+                            "insample_rms_mu": ins["rms_mu"], "heldout_score": h_score,
+                            "heldout_rms_A_norm": float(h["rms_A_norm"].mean()) if len(h) else math.nan,
+                            "heldout_rms_theta_A": float(h["rms_theta_A"].mean()) if len(h) else math.nan,
+                            "heldout_rms_mu": float(h["rms_mu"].mean()) if len(h) else math.nan,
+                            "heldout_replicates": len(h), "fit_cost": fr.cost, "fit_message": fr.message})
+        default_route[model] = best
+    for q in quality:
+        q["default"] = default_route[q["model"]] == q["route"]
+    final = dict(doc1)
+    for model in ("model1", "model2"):
+        final[model] = (doc1 if default_route[model] == "backsolve" else doc2)[model]
+    ss = steady_check(final, steady)
+    for q in quality:
+        doc = dict(final)
+        doc[q["model"]] = (doc1 if q["route"] == "backsolve" else doc2)[q["model"]]
+        s = steady_check(doc, steady)[q["model"]]
+        q.update({f"steady_{k}": v for k, v in s.items() if k != "error"})
+        q["dem_steady_A_norm"], q["dem_steady_theta_A"], q["dem_steady_X"] = steady["A_norm"], steady["theta_A"], steady["X"]
+        if q["model"] == "model1":
+            q["X_c"] = doc["model1"]["X_c"]
+            q["mirrored_steady_X_below_X_c"] = bool("X" in s and -s["X"] < doc["model1"]["X_c"])
+    for name, fr in (("friction_eq2", r1["friction_eq2"]), ("friction_quadratic", r1["friction_quadratic"])):
+        quality.append({"model": name, "route": "mu_vs_X", "insample_rms_mu": fr.rms, "fit_cost": fr.cost,
+                        "fit_message": fr.message, "default": True})
+
+    # tables
+    fitted = {("mu_vs_X", "friction_eq2"): doc1["friction_eq2"],
+              ("mu_vs_X", "friction_quadratic"): doc1["friction_quadratic"],
+              ("backsolve", "model1"): doc1["model1"], ("curves", "model1"): doc2["model1"],
+              ("backsolve", "model2"): doc1["model2"], ("curves", "model2"): doc2["model2"]}
+    ptab = tables.params_table(fitted, iv, default_route)
+    intervals = {}
+    for _, row in ptab[ptab["default"]].iterrows():
+        intervals.setdefault(row["block"], {})[row["parameter"]] = [float(row["low"]), float(row["high"])]
+    final["intervals"] = intervals
+    final["provenance"] = {
+        "source": "calibrate (python -m calibrate)",
+        "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+        "command": " ".join(argv) if argv else None,
+        "cases": [str(c.path) for c in cases],
+        "groups": sorted({c.group for c in cases}),
+        "seeds": [c.seed for c in cases],
+        "default_route": default_route,
+        "routes": {k: v for k, v in tables.ROUTE_NAMES.items()},
+        "intervals": f"bootstrap over seeds, {settings.n_boot} replicates, 2.5-97.5 percentiles",
+        "dem_steady_state": steady,
+        "settings": settings.as_dict(),
+        "synthetic_input": any(c.preshear.meta.get("synthetic") for c in cases),
+    }
+    tables.write_params(final, out / "params.yaml")
+    tables.write_csv(ptab, out / "params_table.csv")
+    btab = tables.bins_table(r1["bins"], iv)
+    tables.write_csv(btab, out / "backsolve_alpha_vs_X.csv")
+    tables.write_csv(pd.DataFrame(quality), out / "fit_quality.csv")
+    if len(heldout):
+        tables.write_csv(heldout, out / "heldout_scores.csv")
+    tables.write_csv(values, out / "bootstrap_values.csv")
+
+    if settings.figures:
+        X, mu = route1.friction_data(samples, bs)
+        figures.fig2a(samples, out / "fig2a_stress_vs_Axy.png")
+        figures.fig2b(X, mu, doc1["friction_eq2"], doc1["friction_quadratic"], out / "fig2b_mu_vs_X.png")
+        m1 = {"back-solve": doc1["model1"], "curves": doc2["model1"]}
+        m2 = {"back-solve": doc1["model2"], "curves": doc2["model2"]}
+        figures.fig3(btab, 1, m1, m2, out / "fig3a_alpha1_vs_X.png")
+        figures.fig3(btab, 2, m1, m2, out / "fig3b_alpha2_vs_X.png")
+        preds = {}
+        prm = params_from_dict(final)
+        for model in ("model1", "model2"):
+            fr = "eq2" if model == "model1" else "quadratic"
+            try:
+                preds[f"{model} ({default_route[model]})"] = {
+                    r.label: route2.replay_run(prm, r, model, fr, settings.route2) for r in replays}
+            except (ValueError, RuntimeError) as exc:
+                log(f"figure: {model} cannot be integrated ({exc})")
+        figures.fig_curves(replays, preds, out / "fig_curves_model_vs_dem.png")
+    log(f"wrote {out} ({time.time() - t0:.1f} s); default routes: {default_route}")
+    return {"default_route": default_route, "params": final, "route1": r1, "route2": r2, "intervals": iv,
+            "quality": pd.DataFrame(quality), "steady": steady, "steady_check": ss, "elapsed": time.time() - t0}

@@ -1,0 +1,267 @@
+r"""Route 2: fit Model 1 / Model 2 to the DEM curves by integrating ``model.simulate``.
+
+Method
+------
+Eq. 4 is rate independent (MODEL.md), so a run is replayed in *path strain*:
+each piece of one sign of the shear rate becomes ``model.steady_shear(length,
+sign)`` at unit rate, where time equals path strain, and the model is read at
+the samples' path strains (``t_eval``). The fabric starts from the model's own
+steady state for the pre-shear's direction (``model.steady_state``), so the
+steady plateaus before and after a reversal test the parameters too.
+
+Residuals, over every sample of every seed and chosen protocol (raw DEM values,
+not smoothed):
+
+.. math::
+    \frac{a_m - a}{\sigma_a},\ \frac{b_m - b}{\sigma_b},\
+    w_\mu\frac{g\sigma_{xy}/p|_m - g\sigma_{xy}/p}{\sigma_\mu}
+
+with each run's sample noise, plus the steady-state residuals of ``fits``. A
+parameter set that runs into the pole, or has no stable steady state, gets a
+large constant residual. The friction law is held at its route-1 fit (Eq. 2 for
+Model 1, the quadratic law for Model 2). ``scipy.optimize.least_squares`` (trf,
+2-point Jacobian with relative step ``diff_step``) runs under a budget of
+``max_evals`` model evaluations (each = one integration per run); the best
+point seen is returned if the budget runs out.
+"""
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+import pandas as pd
+from scipy.optimize import least_squares
+
+from model import PoleError, params_from_dict, simulate, steady_shear, steady_state
+
+from . import fits
+from .fits import FitResult
+
+PENALTY = 1e3
+
+
+@dataclass(frozen=True)
+class Route2Settings:
+    method: str = "RK45"
+    rtol: float = 1e-6
+    atol: float = 1e-9
+    diff_step: float = 1e-3
+    max_evals: int = 150
+    mu_weight: float = 1.0
+    steady_weight: float = 1.0
+    xc_margin: float = 2e-3
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+@dataclass
+class Replay:
+    """One DEM run prepared for replay: pieces (sign, path-strain length), samples and their noise."""
+
+    label: str
+    case: str
+    sign0: float
+    pieces: list
+    s: np.ndarray
+    g: np.ndarray
+    a: np.ndarray
+    b: np.ndarray
+    mu: np.ndarray
+    sd_a: float
+    sd_b: float
+
+
+def _noise(y):
+    d = np.diff(y) / np.sqrt(2.0)
+    return max(float(1.4826 * np.median(np.abs(d - np.median(d)))), 1e-6)
+
+
+def prepare(cases, samples: pd.DataFrame, settings_backsolve) -> list:
+    """Build a ``Replay`` for every chosen reversal run of every case.
+
+    The history comes from the raw run (turning points of the signed strain);
+    the samples are those the back-solve keeps (rate and reversal rules),
+    except that no skip after a reversal is applied here.
+    """
+    from .smoothing import pieces as sign_pieces
+
+    out = []
+    for c in cases:
+        g_pre = float(np.sign(np.median(c.preshear.data["gammadot"].to_numpy())))
+        for proto, run in c.runs.items():
+            d = run.data
+            strain = d["strain"].to_numpy()
+            s_all = np.concatenate([[0.0], np.cumsum(np.abs(np.diff(strain)))])
+            idx = sign_pieces(d["gammadot"].to_numpy())
+            # a turning point lies between the last sample of one sign and the first of the next
+            bounds = [0.0] + [0.5 * (s_all[ix[0] - 1] + s_all[ix[0]]) for ix in idx[1:]] + [float(s_all[-1])]
+            segs = [(float(np.sign(d["gammadot"].iloc[ix[0]])), bounds[k], bounds[k + 1]) for k, ix in enumerate(idx)]
+            sm = samples[(samples["case"] == c.name) & (samples["protocol"] == proto)]
+            keep = sm["rate_frac"].to_numpy() >= settings_backsolve.rate_min
+            sm = sm[keep]
+            out.append(Replay(
+                label=f"{c.name}/{proto}", case=c.name, sign0=g_pre,
+                pieces=[(sg, e - b0) for sg, b0, e in segs if e - b0 > 0],
+                s=sm["s"].to_numpy(), g=sm["g"].to_numpy(), a=sm["a_raw"].to_numpy(), b=sm["b_raw"].to_numpy(),
+                mu=(sm["sigma_xy_over_p"] * sm["g"]).to_numpy(),
+                sd_a=_noise(run.data["A_xx"].to_numpy()), sd_b=_noise(run.data["A_xy"].to_numpy()),
+            ))
+    return out
+
+
+def history_of(replay: Replay):
+    """The unit-rate history in path strain (time = path strain)."""
+    h = None
+    for sg, length in replay.pieces:
+        part = steady_shear(length, sg)
+        h = part if h is None else h + part
+    return h
+
+
+def replay_run(params, replay: Replay, model: str, friction: str, settings: Route2Settings, cache=None):
+    """Model a, b and signed friction at the replay's samples. Raises PoleError / ValueError.
+
+    ``cache`` (a dict) shares one integration between runs with the same
+    history and samples (the seeds of one protocol).
+    """
+    key = (replay.sign0, tuple(np.round([x for pc in replay.pieces for x in pc], 9)), replay.s.tobytes())
+    if cache is not None and key in cache:
+        m = cache[key]
+    else:
+        a0, b0, _ = steady_state(params, model, sign=int(replay.sign0))
+        h = history_of(replay)
+        t = np.clip(replay.s, 0.0, h.t_end)
+        order = np.argsort(t, kind="stable")
+        sim = simulate(params, h, model=model, A0=(a0, b0), method=settings.method, rtol=settings.rtol,
+                       atol=settings.atol, friction=friction, t_eval=t[order])
+        m = np.empty((len(t), 3))
+        m[order, 0] = sim["A_xx"].to_numpy()
+        m[order, 1] = sim["A_xy"].to_numpy()
+        m[order, 2] = sim["sigma_xy_over_p"].to_numpy()
+        if cache is not None:
+            cache[key] = m
+    out = m.copy()
+    out[:, 2] *= replay.g
+    return out
+
+
+def residuals(params, replays, model, friction, sigma_mu, settings: Route2Settings):
+    """Normalised residuals of every replay (see module Notes); raises on pole / no steady state."""
+    parts, cache = [], {}
+    for r in replays:
+        m = replay_run(params, r, model, friction, settings, cache)
+        parts += [(m[:, 0] - r.a) / r.sd_a, (m[:, 1] - r.b) / r.sd_b,
+                  settings.mu_weight * (m[:, 2] - r.mu) / sigma_mu]
+    return np.concatenate(parts)
+
+
+class _Budget(Exception):
+    pass
+
+
+def _with_block(base: dict, block: str, values: dict):
+    d = dict(base)
+    d[block] = dict(values)
+    return params_from_dict(d, source=f"route2 trial ({block})")
+
+
+def fit(replays, base_params: dict, model: str, start: dict, steady: dict, sigma_mu: float,
+        settings: Route2Settings = Route2Settings(), x_lower=None) -> FitResult:
+    """Least-squares fit of the ``model`` block to the replays, from ``start``.
+
+    Parameters
+    ----------
+    replays : list of Replay
+    base_params : dict
+        A full parameter document (``ModelParams.to_dict()``) holding the friction laws to use.
+    model : {"model1", "model2"}
+    start : dict
+        Starting values of the block.
+    steady : dict
+        ``io.steady_values``.
+    sigma_mu : float
+    x_lower : float, optional
+        Lower bound of X_c (Model 1); default ``-steady X + xc_margin``.
+    """
+    friction = "eq2" if model == "model1" else "quadratic"
+    keys = fits.M1_KEYS if model == "model1" else fits.M2_KEYS
+    if model == "model1":
+        scale = np.array([1.0, 10.0, 1e3, 1.0, 10.0, 1e3, 0.01])
+        xl = (-steady["X"] + settings.xc_margin) if x_lower is None else x_lower
+        lo = np.array([-1e3, -1e5, -1e9, -1e3, -1e5, 0.0, xl]) / scale
+        hi = np.array([1e3, 1e5, 0.0, 1e3, 1e5, 1e9, 0.5]) / scale
+    else:
+        scale = np.array([1.0, 1.0, 10.0])
+        lo = np.full(3, -np.inf)
+        hi = np.full(3, np.inf)
+    n_res = sum(3 * len(r.s) for r in replays) + 2
+    state = {"n": 0, "best": None, "best_cost": np.inf, "fails": 0}
+
+    def res(p):
+        if state["n"] >= settings.max_evals:
+            raise _Budget
+        state["n"] += 1
+        vals = dict(zip(keys, (p * scale).tolist()))
+        try:
+            prm = _with_block(base_params, model, vals)
+            r = residuals(prm, replays, model, friction, sigma_mu, settings)
+            if model == "model1":
+                s1, s2 = fits.alpha_model1(steady["X"], *[vals[k] for k in keys])
+            else:
+                s1, s2 = fits.alpha_model2(steady["X"], *[vals[k] for k in keys])
+            r = np.concatenate([r, fits._steady_fabric_residuals(s1, s2, steady, settings.steady_weight)])
+            if not np.all(np.isfinite(r)):
+                raise ValueError("non-finite residuals")
+        except (PoleError, ValueError, FloatingPointError, RuntimeError):
+            state["fails"] += 1
+            r = np.full(n_res, PENALTY)
+        cost = 0.5 * float(np.sum(r**2))
+        if cost < state["best_cost"]:
+            state["best_cost"], state["best"] = cost, p.copy()
+        return r
+
+    x0 = np.array([start[k] for k in keys]) / scale
+    with np.errstate(invalid="ignore"):
+        x0 = np.clip(x0, np.where(np.isfinite(lo), lo + 1e-9 * np.abs(lo) + 1e-12, lo),
+                     np.where(np.isfinite(hi), hi - 1e-9 * np.abs(hi) - 1e-12, hi))
+    message = ""
+    try:
+        sol = least_squares(res, x0, bounds=(lo, hi), x_scale="jac", diff_step=settings.diff_step,
+                            max_nfev=settings.max_evals)
+        message = sol.message
+    except _Budget:
+        message = f"budget of {settings.max_evals} model evaluations used up; best point kept"
+    p = state["best"] if state["best"] is not None else x0
+    vals = dict(zip(keys, (p * scale).tolist()))
+    n_data = n_res - 2
+    rms = float(np.sqrt(2 * state["best_cost"] / max(n_res, 1)))
+    ok = state["best_cost"] < 0.5 * n_res * PENALTY**2
+    return FitResult(model, vals, state["best_cost"], n_data, rms, ok, message, {"evaluations": state["n"], "failed_evaluations": state["fails"]})
+
+
+def score(params, replays, model: str, settings: Route2Settings, sigma_mu: float) -> dict:
+    """Prediction error of ``params`` on ``replays`` (e.g. held-out seeds).
+
+    Returns RMS of |A|, theta_A (degrees, wrapped), mu, and ``score`` = RMS of
+    the normalised residuals (the route-2 objective without the steady terms).
+    ``inf`` everywhere if the model cannot be integrated (pole, no steady state).
+    """
+    friction = "eq2" if model == "model1" else "quadratic"
+    try:
+        z = residuals(params, replays, model, friction, sigma_mu, settings)
+        dA, dth, dmu, cache = [], [], [], {}
+        for r in replays:
+            m = replay_run(params, r, model, friction, settings, cache)
+            nm = np.sqrt(2 * (m[:, 0] ** 2 + m[:, 1] ** 2))
+            nd = np.sqrt(2 * (r.a**2 + r.b**2))
+            tm = np.degrees(0.5 * np.arctan2(m[:, 1], m[:, 0]))
+            td = np.degrees(0.5 * np.arctan2(r.b, r.a))
+            dth.append((tm - td + 90.0) % 180.0 - 90.0)
+            dA.append(nm - nd)
+            dmu.append(m[:, 2] - r.mu)
+        rms = lambda v: float(np.sqrt(np.mean(np.concatenate(v) ** 2)))  # noqa: E731
+        return {"score": float(np.sqrt(np.mean(z**2))), "rms_A_norm": rms(dA), "rms_theta_A": rms(dth),
+                "rms_mu": rms(dmu)}
+    except (PoleError, ValueError, FloatingPointError, RuntimeError):
+        return {"score": np.inf, "rms_A_norm": np.inf, "rms_theta_A": np.inf, "rms_mu": np.inf}

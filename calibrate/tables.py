@@ -1,0 +1,54 @@
+"""Output tables: params.yaml (``model.params`` format), params_table.csv, backsolve_alpha_vs_X.csv, fit_quality.csv."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from model import params_from_dict, save_params
+
+ROUTE_NAMES = {"backsolve": "route 1: back-solve of Eq. 4, fit to alpha(X) bins",
+               "curves": "route 2: integrated model fitted to the DEM curves",
+               "mu_vs_X": "friction law fitted to mu(X) samples"}
+
+
+def params_table(fitted: dict, iv: pd.DataFrame, default_route: dict) -> pd.DataFrame:
+    """Rows (block, parameter, value, low, high, route, default).
+
+    ``fitted`` maps (route, block) -> values dict; ``iv`` is ``bootstrap.intervals``;
+    ``default_route`` maps block -> the route written to params.yaml.
+    """
+    rows = []
+    for (route, block), vals in fitted.items():
+        iv_route = "backsolve" if route == "mu_vs_X" else route
+        for name, v in vals.items():
+            m = iv[(iv["route"] == iv_route) & (iv["block"] == block) & (iv["parameter"] == name)]
+            lo, hi = (float(m["low"].iloc[0]), float(m["high"].iloc[0])) if len(m) else (np.nan, np.nan)
+            rows.append({"block": block, "parameter": name, "value": v, "low": lo, "high": hi, "route": route,
+                         "default": default_route.get(block) == route})
+    return pd.DataFrame(rows)
+
+
+def bins_table(bins: pd.DataFrame, iv: pd.DataFrame) -> pd.DataFrame:
+    """Back-solve bins with their bootstrap intervals (alpha*_low, alpha*_high)."""
+    out = bins.copy()
+    b = iv[iv["route"] == "bins"]
+    for a in ("alpha1", "alpha2"):
+        lo, hi = [], []
+        for x in out["X_lo"]:
+            m = b[(b["block"] == f"{x:.6g}") & (b["parameter"] == a)]
+            lo.append(float(m["low"].iloc[0]) if len(m) else np.nan)
+            hi.append(float(m["high"].iloc[0]) if len(m) else np.nan)
+        out[f"{a}_low"], out[f"{a}_high"] = lo, hi
+    return out
+
+
+def write_params(doc: dict, path) -> None:
+    """Validate through ``model.params`` and write the YAML ``model/`` reads."""
+    save_params(params_from_dict(doc, source=str(path)), path)
+
+
+def write_csv(df: pd.DataFrame, path) -> None:
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    df.to_csv(path, index=False, float_format="%.8g")
