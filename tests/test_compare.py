@@ -143,3 +143,38 @@ def test_missing_column_is_reported_with_the_file(tmp_path, params_file, capsys)
     assert main(["predict", "--dem", str(case), "--params", str(params_file), "--protocols", "heaviside",
                  "--out", str(tmp_path / "out")]) == 2
     assert "heaviside.csv" in capsys.readouterr().err
+
+
+def test_heldout_table_separates_in_and_out_of_sample_and_notes_a_missing_split(tmp_path, params_file):
+    from compare.heldout import heldout_table
+    dirs = write_ensemble(tmp_path / "dem", default_params(), seeds=(1, 2), preshear_strain=0.3, reversal_strain=0.2)
+    paths = []
+    for name, train in (("all", None), ("heaviside_only", ["heaviside"])):
+        out = tmp_path / name
+        out.mkdir()
+        comparison.run(dirs, params_file, ["heaviside", "sinusoidal"], set_name=name,
+                       train_protocols=train).errors.to_csv(out / "errors.csv", index=False)
+        paths.append(out / "errors.csv")
+    only_all = heldout_table(paths[:1])
+    assert (only_all["n_out"] == 0).all() and only_all["note"].str.contains("no other calibration set").all()
+    both = heldout_table(paths).set_index(["set", "model"])
+    row = both.loc[("heaviside_only", "model1")]
+    assert row["n_in"] == 2 and row["n_out"] == 2 and "sinusoidal" in row["held_out"]
+    assert row["rmse_A_norm_out"] < 1e-8            # generating model: exact out of sample too
+
+
+def test_sensitivity_moves_predictions_more_at_5_than_at_1_percent_and_records_poles(tmp_path):
+    from compare import sensitivity
+    dirs = write_ensemble(tmp_path / "dem", default_params(), seeds=(1,), preshear_strain=0.3, reversal_strain=0.2,
+                          protocols=("heaviside",))
+    p = default_params().to_dict()
+    p["intervals"] = {"model1": {"X_c": [0.06, 0.09]}}    # the low end puts the pole below the mirrored X
+    path = tmp_path / "p.yaml"
+    import yaml
+    path.write_text(yaml.safe_dump(p))
+    table, n = sensitivity.run(dirs, path, ["heaviside"], tmp_path / "band.png")
+    assert n <= 2 * 60 and (tmp_path / "band.png").stat().st_size > 0
+    a1 = table[(table["model"] == "model1") & (table["parameter"] == "a1")].set_index("kind")
+    assert 0 < a1.loc["+1%", "dmax_A_norm"] < a1.loc["+5%", "dmax_A_norm"]
+    low = table[(table["parameter"] == "X_c") & (table["kind"] == "interval low")]
+    assert low["status"].str.startswith("PoleError").all()
