@@ -24,10 +24,12 @@ $(STAMP): requirements.txt
 # The quick campaign: every figure and table in results/ in about 10 minutes on 2 cores.
 quick: setup
 	$(VENV)/bin/snakemake -j2 --configfile config/quick.yaml
+	$(VENV)/bin/snakemake --configfile config/quick.yaml --report results/report.html
 
 # The paper's campaign (hours on 2 cores).
 paper: setup
 	$(VENV)/bin/snakemake -j2
+	$(VENV)/bin/snakemake --report results/report.html
 
 test: setup
 	$(PY) -m pytest -q
