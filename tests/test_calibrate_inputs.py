@@ -1,0 +1,90 @@
+"""Bad DEM input stops the calibration with an error naming the file and the problem (never a fit of garbage)."""
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from calibrate import io, synthetic
+from model import default_params
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope="module")
+def good_case(tmp_path_factory):
+    root = tmp_path_factory.mktemp("dem")
+    return synthetic.write_case(root / "p1_I0.001_s1", default_params(), seed=1, preshear_strain=3.0)
+
+
+def copy_case(src, dst):
+    dst.mkdir(parents=True)
+    for f in src.iterdir():
+        (dst / f.name).write_bytes(f.read_bytes())
+    return dst
+
+
+def test_good_case_reads_and_reports_its_steady_state(good_case):
+    case = io.read_case(good_case)
+    st = case.preshear.meta["steady"]
+    assert st["A_xy"] < 0 and 0.1 < st["mu"] < 0.4
+    assert set(case.runs) == {"heaviside", "sinusoidal"}
+
+
+def test_missing_column_is_named(good_case, tmp_path):
+    case = copy_case(good_case, tmp_path / "p1_I0.001_s1")
+    df = pd.read_csv(case / "heaviside.csv").drop(columns=["A_xy"])
+    df.to_csv(case / "heaviside.csv", index=False)
+    with pytest.raises(io.DEMInputError, match=r"heaviside\.csv: missing column\(s\) \['A_xy'\]"):
+        io.read_case(case)
+
+
+def test_nan_is_named_with_its_column_and_row(good_case, tmp_path):
+    case = copy_case(good_case, tmp_path / "p1_I0.001_s1")
+    df = pd.read_csv(case / "sinusoidal.csv")
+    df.loc[7, "mu"] = np.nan
+    df.to_csv(case / "sinusoidal.csv", index=False)
+    with pytest.raises(io.DEMInputError, match=r"sinusoidal\.csv: column 'mu' has 1 NaN.*row 8"):
+        io.read_case(case)
+
+
+def test_too_few_samples(good_case, tmp_path):
+    case = copy_case(good_case, tmp_path / "p1_I0.001_s1")
+    pd.read_csv(case / "heaviside.csv").iloc[:20].to_csv(case / "heaviside.csv", index=False)
+    with pytest.raises(io.DEMInputError, match=r"heaviside\.csv: only 20 samples, at least 50"):
+        io.read_case(case)
+
+
+def test_run_that_never_reached_steady_state(tmp_path):
+    # a quiet run (a large cell) stopped at strain 0.6, while the fabric still grows from isotropy
+    case = synthetic.write_case(tmp_path / "p1_I0.001_s1", default_params(), seed=1, preshear_strain=0.6,
+                                fabric_noise=0.002, mu_noise=0.005)
+    with pytest.raises(io.DEMInputError, match=r"preshear\.csv: the pre-shear never reached steady state"):
+        io.read_case(case)
+
+
+def test_missing_file_and_missing_reversal(good_case, tmp_path):
+    case = copy_case(good_case, tmp_path / "p1_I0.001_s1")
+    (case / "sinusoidal.csv").unlink()
+    with pytest.raises(io.DEMInputError, match=r"sinusoidal\.csv: file not found"):
+        io.read_case(case)
+    df = pd.read_csv(case / "heaviside.csv")
+    df["gammadot"] = np.abs(df["gammadot"])
+    df.to_csv(case / "heaviside.csv", index=False)
+    with pytest.raises(io.DEMInputError, match=r"heaviside\.csv: 'gammadot' never takes the sign opposite"):
+        io.read_case(case, protocols=("heaviside",))
+
+
+def test_command_line_exits_2_naming_the_file(good_case, tmp_path):
+    case = copy_case(good_case, tmp_path / "p1_I0.001_s1")
+    df = pd.read_csv(case / "heaviside.csv")
+    df.loc[3, "A_xx"] = np.inf
+    df.to_csv(case / "heaviside.csv", index=False)
+    out = tmp_path / "cal"
+    r = subprocess.run([sys.executable, "-m", "calibrate", "--dem", str(case), "--out", str(out)],
+                       cwd=ROOT, capture_output=True, text=True, timeout=120)
+    assert r.returncode == 2
+    assert "heaviside.csv: column 'A_xx'" in r.stderr
+    assert not (out / "params.yaml").exists()
