@@ -7,8 +7,9 @@ columns in ``USED_COLUMNS`` are read; nothing beyond the contract is needed.
 
 Conventions
 -----------
-- The reversal starts at the first sample of the reversal CSV, unless its
-  sidecar records ``reversal_time`` (and then rows before it are dropped).
+- The reversal starts where the reversal sidecar says (``reversal_t``,
+  ``reversal_strain``, yade_scripts/SCENE.md; rows before it are dropped), or
+  at the first sample of the reversal CSV when the sidecar lacks them.
 - The initial fabric ``A0`` is the mean of ``(A_xx, A_xy)`` over the pre-shear
   samples within ``a0_window`` strain of its end (at least ``MIN_A0_SAMPLES``
   samples): the DEM fabric just before the reversal, with its per-sample noise
@@ -121,7 +122,10 @@ class Reversal:
     steady_A, steady_mu : float
         |A0| and the mean mu over the same window.
     t0, strain0 : float
-        Time and strain at which the reversal starts.
+        Time and strain at which the reversal starts (the sidecar's
+        ``reversal_t``, ``reversal_strain`` when present, else the first sample).
+    rate_before : float
+        Median rate at the end of the pre-shear (the rate the reversal starts from).
     """
 
     label: str
@@ -135,6 +139,7 @@ class Reversal:
     steady_mu: float
     t0: float
     strain0: float
+    rate_before: float = float("nan")
     meta: dict = field(default_factory=dict)
 
 
@@ -169,14 +174,18 @@ def load_reversal(case_dir, protocol: str, a0_window: float = A0_WINDOW) -> Reve
     path = case_dir / f"{protocol}.csv"
     rev = read_series(path)
     meta = read_sidecar(path)
-    if "reversal_time" in meta:
-        t_rev = float(meta["reversal_time"])
-        if not (rev["t"].iloc[0] - 1e-9 * abs(t_rev) <= t_rev <= rev["t"].iloc[-1]):
-            raise DEMInputError(f"{path}: sidecar reversal_time = {t_rev} lies outside the run "
-                                f"[{rev['t'].iloc[0]}, {rev['t'].iloc[-1]}]")
-        rev = rev[rev["t"] >= t_rev - 1e-9 * max(1.0, abs(t_rev))].reset_index(drop=True)
+    t_rev = s_rev0 = None
+    if "reversal_t" in meta:   # yade_scripts/SCENE.md: reversal_t, reversal_strain (start of the reversal)
+        t_rev = float(meta["reversal_t"])
+        tol = 1e-9 * max(1.0, abs(t_rev))
+        if not (pre["t"].iloc[-1] - tol <= t_rev <= rev["t"].iloc[-1]):
+            raise DEMInputError(f"{path}: sidecar reversal_t = {t_rev} lies outside "
+                                f"[end of pre-shear {pre['t'].iloc[-1]}, end of run {rev['t'].iloc[-1]}]")
+        rev = rev[rev["t"] >= t_rev - tol].reset_index(drop=True)
         if len(rev) < MIN_SAMPLES:
-            raise DEMInputError(f"{path}: fewer than {MIN_SAMPLES} samples after reversal_time = {t_rev}")
+            raise DEMInputError(f"{path}: fewer than {MIN_SAMPLES} samples after reversal_t = {t_rev}")
+        if "reversal_strain" in meta:
+            s_rev0 = float(meta["reversal_strain"])
     # the pre-shear's direction, and a check that the reversal opposes it
     g_pre = float(np.median(pre["gammadot"].to_numpy()[-max(MIN_A0_SAMPLES, len(pre) // 10):]))
     g_rev = rev["gammadot"].to_numpy()
@@ -192,10 +201,13 @@ def load_reversal(case_dir, protocol: str, a0_window: float = A0_WINDOW) -> Reve
     steady_A = float(_fabric(a0, b0)[0])
     steady_mu = float(pre["mu"].to_numpy()[win].mean())
     data = rev.copy()
-    t0, strain0 = float(data["t"].iloc[0]), float(data["strain"].iloc[0])
+    t0 = float(data["t"].iloc[0]) if t_rev is None else t_rev
+    strain0 = float(data["strain"].iloc[0]) if s_rev0 is None else s_rev0
     data["tau"] = data["t"] - t0
-    data["s_rev"] = np.concatenate([[0.0], np.cumsum(np.abs(np.diff(data["strain"].to_numpy())))])
+    st = data["strain"].to_numpy()
+    data["s_rev"] = abs(st[0] - strain0) + np.concatenate([[0.0], np.cumsum(np.abs(np.diff(st)))])
     data["A_norm"], data["theta_A"] = _fabric(data["A_xx"].to_numpy(), data["A_xy"].to_numpy())
     group, seed = split_label(case_dir.name)
     return Reversal(label=case_dir.name, group=group, seed=seed, protocol=protocol, path=path, data=data,
-                    A0=(a0, b0), steady_A=steady_A, steady_mu=steady_mu, t0=t0, strain0=strain0, meta=meta)
+                    A0=(a0, b0), steady_A=steady_A, steady_mu=steady_mu, t0=t0, strain0=strain0,
+                    rate_before=g_pre, meta=meta)

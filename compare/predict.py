@@ -106,8 +106,13 @@ def imposed_history(rev: Reversal):
         t_eval = np.maximum.accumulate(np.clip(ds / g[0], 0.0, None))   # equal strain, monotone
         history = tabulated(np.array([0.0, max(tau[-1], t_eval[-1])]), np.array([g[0], g[0]]))
     else:
-        history = tabulated(tau, g)
-        t_eval = tau
+        if tau[0] > 0:   # the first sample comes after the reversal start: begin at the pre-shear's rate
+            tau, g = np.concatenate([[0.0], tau]), np.concatenate([[rev.rate_before], g])
+            history = tabulated(tau, g)
+            t_eval = tau[1:]
+        else:
+            history = tabulated(tau, g)
+            t_eval = tau
     return history, t_eval, width
 
 

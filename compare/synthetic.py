@@ -94,6 +94,8 @@ def write_case(case_dir, params, seed=1, model="model1", friction="eq2", I=1e-3,
         meta = {"synthetic": True, "generator": "compare.synthetic.write_case", "model": model,
                 "friction": friction, "noise_seed": int(seed), "fabric_noise": fabric_noise,
                 "mu_noise": mu_noise, "inertial_number": I, "stage": name}
+        if name != "preshear":   # as yade_scripts/SCENE.md: the start of the reversal
+            meta.update(reversal_t=t_end, reversal_strain=float(preshear_strain))
         (case_dir / f"{name}.json").write_text(json.dumps(meta, indent=1))
     return case_dir
 

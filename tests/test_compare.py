@@ -178,3 +178,14 @@ def test_sensitivity_moves_predictions_more_at_5_than_at_1_percent_and_records_p
     assert 0 < a1.loc["+1%", "dmax_A_norm"] < a1.loc["+5%", "dmax_A_norm"]
     low = table[(table["parameter"] == "X_c") & (table["kind"] == "interval low")]
     assert low["status"].str.startswith("PoleError").all()
+
+
+def test_reversal_start_comes_from_the_sidecar_when_the_first_sample_is_later(tmp_path, params_file):
+    case = write_case(tmp_path / "p1_I0.001_s1", default_params(), preshear_strain=0.3, reversal_strain=0.3,
+                      protocols=("heaviside",))
+    df = pd.read_csv(case / "heaviside.csv")
+    df.iloc[3:].to_csv(case / "heaviside.csv", index=False)      # samples start 0.003 strain after the reversal
+    rev = load_reversal(case, "heaviside")
+    assert rev.strain0 == pytest.approx(0.3) and rev.data["s_rev"].iloc[0] == pytest.approx(0.003)
+    pred = predict(rev, default_params(), "model1")
+    assert np.max(np.abs(pred.table["A_norm"].to_numpy() - rev.data["A_norm"].to_numpy())) < 1e-8
