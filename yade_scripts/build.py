@@ -1,0 +1,150 @@
+"""Build the sheared cell: periodic in x, two rough walls of disks of diameter d,
+quasi-2D grains (spheres held in the xy plane with disk masses and inertias).
+
+Layout (stored in O.tags['ys_layout'] so that every later stage finds it):
+- grains have ids 0..N-1 (so that per-body lists from YADE's C++ helpers can be
+  sliced), then the bottom wall's disks, then the top wall's disks and the top
+  clump.
+- the bottom wall's centre line is at y = y_bottom; its disks are fixed and move
+  at a prescribed x-velocity.
+- the top wall is a clump free in y only, loaded by a permanent force -p W d.
+"""
+import json
+import math
+import random
+
+from yade import utils
+from yade.minieigenHP import Vector3
+from yade.wrapper import Omega, ViscElMat
+
+O = Omega()
+
+
+def contact_material(scene, radius):
+    """ViscElMat for a disk of this radius: young = kn/(2R)*2... so that 2*E*R = 2 kn.
+
+    Two such disks combine in series to kn whatever their radii (YADE's Ip2 uses
+    k_i = 2 E_i R_i); poisson = kt/kn gives ks = kt; en = et = restitution is
+    turned into a dashpot from the masses of each pair.
+    """
+    m, d = scene["material"], scene["material"]["diameter"]
+    kn = m["kappa"] * m["pressure"] * d
+    mat = ViscElMat(
+        young=kn / radius, poisson=m["kt_over_kn"], en=m["restitution"], et=m["restitution"],
+        frictionAngle=math.atan(m["friction"]), density=m["density"])
+    rr = scene["effects"]["rolling_resistance"]
+    if rr > 0:
+        mat.mR = rr
+        mat.mRtype = 1
+    return O.materials.append(mat)
+
+
+def set_disk(body, radius, rho, depth):
+    """Disk mass and moment of inertia (thickness `depth`), motion held in the xy plane."""
+    mass = rho * math.pi * radius**2 * depth
+    body.state.mass = mass
+    body.state.inertia = Vector3(1, 1, 1) * (0.5 * mass * radius**2)
+
+
+def loose_placement(rnd, diameters, W, y_lo, y_hi):
+    """Random sequential placement of non-overlapping disks, periodic in x.
+
+    Centres in [0, W) x [y_lo + r, y_hi - r]. Returns a list of (x, y).
+    """
+    cell = max(diameters)
+    nx = max(1, int(W // cell))
+    cw = W / nx
+    grid = {}
+    pos = []
+    for i, D in enumerate(diameters):
+        r = D / 2
+        for _ in range(100000):
+            x = rnd.uniform(0, W)
+            y = rnd.uniform(y_lo + r, y_hi - r)
+            ix, iy = int(x // cw) % nx, int((y - y_lo) // cell)
+            ok = True
+            for jx in (ix - 1, ix, ix + 1):
+                for jy in (iy - 1, iy, iy + 1):
+                    for j in grid.get((jx % nx, jy), ()):
+                        xj, yj = pos[j]
+                        dx = x - xj
+                        dx -= W * round(dx / W)
+                        if dx * dx + (y - yj) ** 2 < (r + diameters[j] / 2) ** 2:
+                            ok = False
+                            break
+                    if not ok:
+                        break
+                if not ok:
+                    break
+            if ok:
+                grid.setdefault((ix, iy), []).append(i)
+                pos.append((x, y))
+                break
+        else:
+            raise RuntimeError("loose placement failed: lower pack.initial_solid_fraction")
+    return pos
+
+
+def new_cell(scene, der):
+    """Create the loose cell of the pack stage. Returns the layout dict."""
+    O.reset()
+    d, rho, W, H = der["d"], der["rho"], der["W"], der["H"]
+    m, pk = scene["material"], scene["pack"]
+    rnd = random.Random(scene["seed"])
+    N = der["N"]
+    diam = [d * rnd.uniform(m["size_ratio_min"], m["size_ratio_max"]) for _ in range(N)]
+    # initial gap: the loose placement at initial_solid_fraction
+    H0 = d + (H - d) * pk["solid_fraction_guess"] / pk["initial_solid_fraction"]
+    y_bottom = 2 * d
+    y_top = y_bottom + H0
+    O.periodic = True
+    O.cell.setBox(W, y_top + 4 * d + 2 * H0, 4 * d * m["size_ratio_max"])
+    pos = loose_placement(rnd, diam, W, y_bottom + d / 2, y_top - d / 2)
+    grains = []
+    for (x, y), D in zip(pos, diam):
+        b = utils.sphere(Vector3(x, y, 0), D / 2, material=contact_material(scene, D / 2))
+        set_disk(b, D / 2, rho, d)
+        b.state.blockedDOFs = "zXY"
+        grains.append(O.bodies.append(b))
+    n_w = der["n_wall"]
+    s = W / n_w
+    wall_mat = contact_material(scene, d / 2)
+    bottom = []
+    for i in range(n_w):
+        b = utils.sphere(Vector3((i + 0.5) * s, y_bottom, 0), d / 2, material=wall_mat, fixed=True)
+        set_disk(b, d / 2, rho, d)
+        b.state.blockedDOFs = "xyzXYZ"
+        bottom.append(O.bodies.append(b))
+    top_members = []
+    for i in range(n_w):
+        b = utils.sphere(Vector3(i * s, y_top, 0), d / 2, material=wall_mat)
+        set_disk(b, d / 2, rho, d)
+        top_members.append(b)
+    clump_id, top = O.bodies.appendClumped(top_members)
+    top = list(top)
+    cl = O.bodies[clump_id]
+    m_wall = n_w * rho * math.pi * d**2 / 4 * d
+    cl.state.mass = m_wall
+    cl.state.inertia = Vector3(1, 1, 1) * m_wall * W**2  # rotation is blocked anyway
+    cl.state.blockedDOFs = "xzXYZ"
+    layout = dict(N=N, grains=[grains[0], grains[-1] + 1], bottom=bottom, top=top, clump=clump_id,
+                  y_bottom=y_bottom, n_wall=n_w)
+    assert grains == list(range(N)), "grains must have ids 0..N-1"
+    O.tags["ys_layout"] = json.dumps(layout)
+    return layout
+
+
+def layout():
+    return json.loads(O.tags["ys_layout"])
+
+
+def set_wall_load(lay, force):
+    """Permanent force on the top clump (not saved with the state: set after every load)."""
+    O.forces.setPermF(lay["clump"], Vector3(0, -force, 0))
+
+
+def set_wall_speeds(lay, u_top, u_bottom):
+    cl = O.bodies[lay["clump"]].state
+    cl.vel = Vector3(u_top, cl.vel[1], 0)
+    for i in lay["bottom"]:
+        O.bodies[i].state.vel = Vector3(u_bottom, 0, 0)

@@ -1,0 +1,94 @@
+"""Measurements of one sample, with YADE's C++ helpers where they exist.
+
+Conventions (MODEL.md): tension-positive Cauchy stress, p > 0 in compression,
+sigma_xy > 0 when the top wall moving towards +x is dragged back.
+A = -I/2 + mean n(x)n over the bulk contacts.
+"""
+import math
+
+import numpy as np
+import yade._utils as yu
+from yade.minieigenHP import Vector3
+from yade.wrapper import Omega
+
+O = Omega()
+EX, EY = Vector3(1, 0, 0), Vector3(0, 1, 0)
+BIG = 1e30
+COLUMNS = ["t", "strain", "gammadot", "U_top", "U_bottom", "gap", "A_xx", "A_xy", "n_contacts",
+           "sigma_xy", "p", "mu", "sigma_xy_bulk", "p_bulk", "phi", "Z", "inertial_number"]
+
+
+def walls(lay):
+    """Positions, speeds and contact forces of the walls (SI)."""
+    top = O.bodies[lay["clump"]].state
+    bot = O.bodies[lay["bottom"][0]].state
+    return dict(
+        x_top=float(top.pos[0]), y_top=float(top.pos[1]), u_top=float(top.vel[0]), v_top=float(top.vel[1]),
+        x_bot=float(bot.pos[0]), y_bot=float(bot.pos[1]), u_bot=float(bot.vel[0]),
+        fx_top=float(yu.sumForces(lay["top"], EX)), fy_top=float(yu.sumForces(lay["top"], EY)),
+        fx_bot=float(yu.sumForces(lay["bottom"], EX)), fy_bot=float(yu.sumForces(lay["bottom"], EY)))
+
+
+class Bulk:
+    """Bulk-band measurements: fabric, contacts, Love-Weber stress, solid fraction, Z."""
+
+    def __init__(self, lay, d):
+        self.N = lay["N"]
+        self.d = d
+        r = np.array([float(O.bodies[i].shape.radius) for i in range(self.N)])
+        self.area = math.pi * r**2  # disk areas
+        self.vol3 = 4.0 / 3.0 * math.pi * r**3  # bodyStressTensors divides by the sphere volume
+
+    def band(self, y_bot, y_top, excl):
+        return y_bot + excl, y_top - excl
+
+    def measure(self, lay, y_lo, y_hi, W):
+        N, d = self.N, self.d
+        lo, hi = Vector3(-BIG, y_lo, -BIG), Vector3(BIG, y_hi, BIG)
+        F = yu.fabricTensor(extrema=[lo, hi])[0]
+        ys = np.asarray(yu.coordsAndDisplacements(1)[0][:N])
+        inband = (ys >= y_lo) & (ys <= y_hi)
+        nb = int(inband.sum())
+        nint = np.asarray(yu.numIntrsOfEachBody()[:N], dtype=float)
+        band_area = W * (y_hi - y_lo)
+        phi = float(self.area[inband].sum() / band_area) if nb else math.nan
+        Z = float(nint[inband].mean()) if nb else math.nan
+        # contacts of the fabric (contact point in the band): half the contact
+        # ends of the band's disks, a C++-only estimate (exact up to the
+        # contacts that straddle the band's edges)
+        n_contacts = int(round(nint[inband].sum() / 2))
+        st = yu.bodyStressTensors()
+        idx = np.nonzero(inband)[0]
+        s = np.zeros(3)
+        for i in idx:
+            m = st[int(i)]
+            w = self.vol3[i]
+            s[0] += w * float(m[0, 0])
+            s[1] += w * float(m[1, 1])
+            s[2] += w * 0.5 * (float(m[0, 1]) + float(m[1, 0]))
+        vol = band_area * d
+        s /= vol
+        a_xx = float(F[0, 0]) - 0.5
+        a_xy = 0.5 * (float(F[0, 1]) + float(F[1, 0]))
+        return dict(A_xx=a_xx, A_xy=a_xy, n_contacts=n_contacts, sigma_xy_bulk=s[2],
+                    p_bulk=-(s[0] + s[1]) / 2, phi=phi, Z=Z, ys=ys)
+
+
+def max_overlap_d(d, smax):
+    """Largest overlap of any contact, in d.
+
+    C++ bound first (maxOverlapRatio gives u_N / (2 r_eff), and 2 r_eff <= smax d / 2);
+    the exact Python loop over contacts runs only when the bound is above `limit`.
+    """
+    ratio = float(yu.maxOverlapRatio())
+    return ratio * smax / 2
+
+
+def exact_max_overlap_d(d):
+    best = 0.0
+    for i in O.interactions:
+        try:
+            best = max(best, float(i.geom.penetrationDepth))
+        except AttributeError:
+            pass
+    return best / d

@@ -1,0 +1,46 @@
+"""Entry point: yade -n -x yade_scripts/run_stage.py <scene.json> <stage> <case_dir>
+
+Runs one stage (pack, preshear, heaviside, sinusoidal) of one case; see SCENE.md.
+Exit codes: 0 done, 1 unexpected error, 2 bad scene or missing input, 3 guard fired.
+"""
+import os
+import sys
+
+# under `yade -x`, __file__ is /usr/bin/yade: find this directory from argv[0]
+sys.path.insert(0, os.path.dirname(os.path.abspath(sys.argv[0])))
+
+import scene as scenemod  # noqa: E402
+
+USAGE = "usage: yade -n -x yade_scripts/run_stage.py <scene.json> <pack|preshear|heaviside|sinusoidal> <case_dir>"
+
+
+def main(argv):
+    if len(argv) != 3 or argv[1] not in scenemod.STAGES:
+        print(USAGE, file=sys.stderr)
+        return 2
+    path, stage, case_dir = argv
+    try:
+        scene, sha = scenemod.load(path, stage)
+    except scenemod.SceneError as e:
+        print(e, file=sys.stderr)
+        return 2
+    import stages  # YADE imports only once the scene is known to be good
+
+    try:
+        st = stages.Stage(scene, sha, stage, case_dir)
+        st.prepare()
+        st.run()
+    except stages.InputError as e:
+        print(f"input error: {e}", file=sys.stderr)
+        return 2
+    except stages.GuardError as e:
+        print(f"guard: {e}", file=sys.stderr)
+        return 3
+    return 0
+
+
+rc = main(sys.argv[1:])
+sys.stdout.flush()
+sys.stderr.flush()
+if rc:
+    os._exit(rc)

@@ -1,0 +1,228 @@
+"""Load and validate a scene file (see SCENE.md). Pure Python: no YADE import.
+
+Every key is checked once, here, before anything is built: a missing required
+key, an unknown key, a wrong type or a value out of range raises SceneError
+whose message names the key.
+"""
+import hashlib
+import json
+import math
+
+INF = float("inf")
+REQUIRED = object()
+STAGES = ("pack", "preshear", "heaviside", "sinusoidal")
+
+
+class SceneError(ValueError):
+    pass
+
+
+def _num(lo, hi, lo_open=False, hi_open=False, integer=False):
+    return dict(kind="int" if integer else "num", lo=lo, hi=hi, lo_open=lo_open, hi_open=hi_open)
+
+
+# section -> key -> (spec, default); default REQUIRED means the key must be given
+SPEC = {
+    "geometry": {
+        "H_over_d": (_num(4, 200), REQUIRED),
+        "W_over_H": (_num(0.5, 20), REQUIRED),
+    },
+    "material": {
+        "diameter": (_num(0, 1, lo_open=True), REQUIRED),
+        "density": (_num(0, 1e5, lo_open=True), REQUIRED),
+        "pressure": (_num(0, 1e9, lo_open=True), REQUIRED),
+        "kappa": (_num(100, 1e7), REQUIRED),
+        "kt_over_kn": (_num(0, 1, lo_open=True), REQUIRED),
+        "restitution": (_num(0, 1, lo_open=True, hi_open=True), REQUIRED),
+        "friction": (_num(0, 2), REQUIRED),
+        "size_ratio_min": (_num(0, 1, lo_open=True), REQUIRED),
+        "size_ratio_max": (_num(1, 3), REQUIRED),
+    },
+    "loading": {
+        "inertial_number": (_num(1e-5, 0.1), REQUIRED),
+    },
+    "timestep": {
+        "dt_over_tc": (_num(0, 0.3, lo_open=True), REQUIRED),
+    },
+    "pack": {
+        "initial_solid_fraction": (_num(0.05, 0.7), 0.4),
+        "solid_fraction_guess": (_num(0.5, 0.9), 0.8),
+        "ke_max": (_num(0, 1, lo_open=True), 1e-7),
+        "wall_speed_max": (_num(0, 1, lo_open=True), 1e-3),
+        "pressure_tolerance": (_num(0, 1, lo_open=True), 0.02),
+        "compaction_pressure": (_num(0, 1, lo_open=True), 0.05),
+        "ramp_time": (_num(0, 1e5), 20.0),
+        "check_interval": (_num(0, 1e3, lo_open=True), 0.5),
+        "max_time": (_num(0, 1e6, lo_open=True), 2000.0),
+    },
+    "preshear": {
+        "strain": (_num(0, 100, lo_open=True), REQUIRED),
+    },
+    "heaviside": {
+        "strain": (_num(0, 100, lo_open=True), REQUIRED),
+    },
+    "sinusoidal": {
+        "strain": (_num(0, 100, lo_open=True), REQUIRED),
+        "transition_strain": (_num(0, 10, lo_open=True), REQUIRED),
+    },
+    "sampling": {
+        "fine_interval": (_num(0, 0.01, lo_open=True), REQUIRED),
+        "fine_window": (_num(0, 10), REQUIRED),
+        "coarse_interval": (_num(0, 0.1, lo_open=True), REQUIRED),
+        "bulk_exclusion_d": (_num(0, 20), 3.0),
+    },
+    "effects": {
+        "gravity": (dict(kind="gravity"), False),
+        "damping": (_num(0, 1, hi_open=True), 0.0),
+        "rolling_resistance": (_num(0, 1), 0.0),
+        "measurements": (dict(kind="bool"), True),
+    },
+    "run": {
+        "checkpoint_every_s": (_num(1, 1e5), 600.0),
+        "progress_every_s": (_num(0.1, 1e5), 30.0),
+    },
+    "guards": {
+        "max_overlap_d": (_num(0, 0.5, lo_open=True), 0.05),
+        "pressure_tolerance": (_num(0, 10, lo_open=True), 0.2),
+        "pressure_window_strain": (_num(0, 100, lo_open=True), 0.1),
+    },
+}
+# sections that may be left out entirely (all keys have defaults, or only some stages need them)
+OPTIONAL_SECTIONS = {"pack", "effects", "run", "guards", "heaviside", "sinusoidal"}
+STAGE_SECTIONS = {"heaviside": "heaviside", "sinusoidal": "sinusoidal"}
+
+
+def _fmt_range(s):
+    lo = "(" if s["lo_open"] else "["
+    hi = ")" if s["hi_open"] else "]"
+    return f"{lo}{s['lo']:g}, {s['hi']:g}{hi}"
+
+
+def _check_value(name, spec, v):
+    kind = spec["kind"]
+    if kind == "bool":
+        if not isinstance(v, bool):
+            raise SceneError(f"scene error: {name} = {v!r} must be true or false")
+        return v
+    if kind == "gravity":
+        if v is False or v is None:
+            return False
+        if (isinstance(v, list) and len(v) in (2, 3)
+                and all(isinstance(x, (int, float)) and not isinstance(x, bool)
+                        and math.isfinite(x) for x in v)):
+            if len(v) == 3 and v[2] != 0:
+                raise SceneError(f"scene error: {name} = {v!r}: the z component must be 0 (disks in the xy plane)")
+            if all(x == 0 for x in v):
+                return False
+            return [float(v[0]), float(v[1])]
+        raise SceneError(f"scene error: {name} = {v!r} must be false or [gx, gy] in m/s^2")
+    if isinstance(v, bool) or not isinstance(v, (int, float)):
+        raise SceneError(f"scene error: {name} = {v!r} must be a number")
+    if kind == "int" and not (isinstance(v, int) or float(v).is_integer()):
+        raise SceneError(f"scene error: {name} = {v!r} must be an integer")
+    if not math.isfinite(v):
+        raise SceneError(f"scene error: {name} = {v!r} must be finite")
+    lo_bad = v <= spec["lo"] if spec["lo_open"] else v < spec["lo"]
+    hi_bad = v >= spec["hi"] if spec["hi_open"] else v > spec["hi"]
+    if lo_bad or hi_bad:
+        raise SceneError(f"scene error: {name} = {v!r} is out of range {_fmt_range(spec)}")
+    return int(v) if kind == "int" else float(v)
+
+
+def validate(raw, stage=None):
+    """Return the scene with defaults filled in; raise SceneError naming the bad key.
+
+    stage: if given, the sections that stage needs must be present.
+    """
+    if not isinstance(raw, dict):
+        raise SceneError("scene error: the scene must be a JSON object")
+    known = set(SPEC) | {"seed", "meta"}
+    for k in raw:
+        if k not in known:
+            raise SceneError(f"scene error: unknown key '{k}' (allowed: {', '.join(sorted(known))})")
+    out = {}
+    if "seed" not in raw:
+        raise SceneError("scene error: missing required key 'seed'")
+    out["seed"] = _check_value("seed", _num(0, 2**31 - 1, integer=True), raw["seed"])
+    meta = raw.get("meta", {})
+    if not isinstance(meta, dict):
+        raise SceneError("scene error: meta must be a JSON object")
+    out["meta"] = meta
+    for sec, keys in SPEC.items():
+        if sec not in raw:
+            if sec in OPTIONAL_SECTIONS:
+                if stage is not None and STAGE_SECTIONS.get(stage) == sec:
+                    raise SceneError(f"scene error: missing section '{sec}' needed by stage {stage}")
+                if sec in STAGE_SECTIONS.values():
+                    continue
+                src = {}
+            else:
+                raise SceneError(f"scene error: missing required section '{sec}'")
+        else:
+            src = raw[sec]
+        if not isinstance(src, dict):
+            raise SceneError(f"scene error: section '{sec}' must be a JSON object")
+        for k in src:
+            if k not in keys:
+                raise SceneError(f"scene error: unknown key '{sec}.{k}' (allowed: {', '.join(keys)})")
+        o = {}
+        for k, (spec, default) in keys.items():
+            name = f"{sec}.{k}"
+            if k in src:
+                o[k] = _check_value(name, spec, src[k])
+            elif default is REQUIRED:
+                raise SceneError(f"scene error: missing required key '{name}'")
+            else:
+                o[k] = default
+        out[sec] = o
+    # cross-key checks
+    m, s = out["material"], out["sampling"]
+    if s["coarse_interval"] < s["fine_interval"]:
+        raise SceneError("scene error: sampling.coarse_interval must be >= sampling.fine_interval")
+    H = out["geometry"]["H_over_d"]
+    if H - 2 * s["bulk_exclusion_d"] < 1:
+        raise SceneError(
+            f"scene error: sampling.bulk_exclusion_d = {s['bulk_exclusion_d']:g} leaves no bulk band "
+            f"(needs H_over_d - 2*bulk_exclusion_d >= 1, H_over_d = {H:g})")
+    W = out["geometry"]["W_over_H"] * H
+    if W < 3 * m["size_ratio_max"]:
+        raise SceneError("scene error: geometry.W_over_H too small: the periodic width must hold 3 of the largest disks")
+    if out["pack"]["initial_solid_fraction"] >= out["pack"]["solid_fraction_guess"]:
+        raise SceneError("scene error: pack.initial_solid_fraction must be below pack.solid_fraction_guess")
+    return out
+
+
+def load(path, stage=None):
+    try:
+        with open(path) as f:
+            text = f.read()
+    except OSError as e:
+        raise SceneError(f"scene error: cannot read scene file {path}: {e}")
+    try:
+        raw = json.loads(text)
+    except json.JSONDecodeError as e:
+        raise SceneError(f"scene error: {path} is not valid JSON: {e}")
+    scene = validate(raw, stage)
+    return scene, hashlib.sha256(text.encode()).hexdigest()
+
+
+def derived(scene):
+    """Physical quantities that follow from the scene (SI units)."""
+    m, g = scene["material"], scene["geometry"]
+    d, rho, p, kappa = m["diameter"], m["density"], m["pressure"], m["kappa"]
+    H = g["H_over_d"] * d
+    W = g["W_over_H"] * H
+    kn = kappa * p * d
+    m_d = rho * math.pi * d**2 / 4 * d  # disk of diameter d, thickness d
+    tc = math.sqrt(m_d / kn)
+    dt = scene["timestep"]["dt_over_tc"] * tc
+    T0 = d * math.sqrt(rho / p)  # time unit
+    V0 = math.sqrt(p / rho)  # velocity unit
+    gd = scene["loading"]["inertial_number"] / T0
+    U = gd * H / 2
+    smin, smax = m["size_ratio_min"], m["size_ratio_max"]
+    D2 = d**2 * (smin**2 + smin * smax + smax**2) / 3  # <D^2> for D uniform
+    n_wall = max(3, int(math.floor(W / d + 1e-9)))
+    N = int(round(scene["pack"]["solid_fraction_guess"] * W * (H - d) / (math.pi * D2 / 4)))
+    return dict(d=d, rho=rho, p=p, H=H, W=W, kn=kn, kt=kn * m["kt_over_kn"], m_d=m_d, tc=tc, dt=dt,
+                T0=T0, V0=V0, gammadot=gd, U=U, N=N, n_wall=n_wall)

@@ -1,0 +1,423 @@
+"""The four stages and their controller (sampling, progress, checkpoints, guards).
+
+One controller per process. It runs inside a PyRunner at the sampling interval:
+writes one CSV row, checks the guards, prints progress and, every
+run.checkpoint_every_s, saves a checkpoint. Its state lives in O.tags so that a
+checkpoint carries it and a killed stage resumes exactly at its last checkpoint.
+"""
+import builtins
+import json
+import math
+import os
+import shutil
+import sys
+import time
+
+import numpy as np
+import yade
+from yade.wrapper import Omega
+
+import build
+import engines
+import measure
+import scene as scenemod
+
+O = Omega()
+PREVIOUS = {"preshear": "pack", "heaviside": "preshear", "sinusoidal": "preshear"}
+
+
+class GuardError(RuntimeError):
+    """A guard fired: the run stops with exit code 3."""
+
+
+class InputError(RuntimeError):
+    """A missing or mismatched input: exit code 2."""
+
+
+def _atomic_json(path, obj):
+    tmp = path + ".tmp"
+    with open(tmp, "w") as f:
+        json.dump(obj, f, indent=1, sort_keys=True)
+        f.flush()
+        os.fsync(f.fileno())
+    os.replace(tmp, path)
+
+
+def _fmt(x):
+    if isinstance(x, float):
+        return repr(x) if math.isfinite(x) else "nan"
+    return str(x)
+
+
+class Stage:
+    def __init__(self, scene, scene_hash, stage, case_dir):
+        self.scene, self.hash, self.stage, self.case_dir = scene, scene_hash, stage, case_dir
+        self.der = scenemod.derived(scene)
+        self.partial = os.path.join(case_dir, ".partial", stage)
+        self.csv_path = os.path.join(self.partial, f"{stage}.csv")
+        self.resume_path = os.path.join(self.partial, "resume.json")
+        self.error = None
+        self.done = False
+        self.csv = None
+
+    # ------------------------------------------------------------------ setup
+    def prepare(self):
+        os.makedirs(self.case_dir, exist_ok=True)
+        resume = None
+        if os.path.exists(self.resume_path):
+            with open(self.resume_path) as f:
+                resume = json.load(f)
+            if resume.get("scene_sha256") != self.hash:
+                print(f"[{self.stage}] partial run from another scene: discarded", flush=True)
+                resume = None
+        if resume is None:
+            shutil.rmtree(self.partial, ignore_errors=True)
+            os.makedirs(self.partial)
+            self.start_fresh()
+            self.st["resumed"] = 0
+            with open(self.csv_path, "w") as f:
+                f.write(",".join(self.columns()) + "\n")
+        else:
+            ck = os.path.join(self.partial, resume["checkpoint"])
+            O.load(ck)
+            self.lay = build.layout()
+            self.st = json.loads(O.tags["ys_state"])
+            self.st["resumed"] += 1
+            self._truncate_csv(self.st["rows"])
+            print(f"[{self.stage}] resumed from {resume['checkpoint']} at iteration {O.iter}, "
+                  f"strain {self.st['strain']:.5f}, {self.st['rows']} rows kept", flush=True)
+        O.dt = self.st["dt"]
+        build.set_wall_load(self.lay, self.st["load"])
+        self.bulk = measure.Bulk(self.lay, self.der["d"])
+        self.csv = open(self.csv_path, "a")
+        self.t_wall0 = time.time()
+        self.iter_wall0 = O.iter
+        self.last_progress = self.t_wall0
+        self.last_checkpoint = self.t_wall0
+        self._install_engines()
+
+    def columns(self):
+        return measure.COLUMNS + (["ke", "wall_speed", "load"] if self.stage == "pack" else [])
+
+    def _truncate_csv(self, rows):
+        with open(self.csv_path) as f:
+            lines = f.readlines()
+        keep = lines[: rows + 1]
+        with open(self.csv_path, "w") as f:
+            f.writelines(keep)
+            f.flush()
+            os.fsync(f.fileno())
+
+    def start_fresh(self):
+        der, sc = self.der, self.scene
+        smp = sc["sampling"]
+        st = dict(stage=self.stage, rows=0, samples_p=[], sum_p=0.0, sum_gd=0.0, n_acc=0, wall_time=0.0,
+                  window=[], pack_ok=0)
+        steps_per_strain = 1.0 / (der["gammadot"] * der["dt"])
+        st["fine_every"] = max(1, int(round(smp["fine_interval"] * steps_per_strain)))
+        st["coarse_every"] = max(st["fine_every"], int(round(smp["coarse_interval"] * steps_per_strain)))
+        if self.stage == "pack":
+            self.lay = build.new_cell(sc, der)
+            st.update(dt=der["dt"], t_origin=0.0, strain=0.0, iter0=0, time0=0.0, phase="compress",
+                      load=sc["pack"]["compaction_pressure"] * der["p"] * der["W"] * der["d"])
+            st["every"] = max(1, int(round(sc["pack"]["check_interval"] * der["T0"] / der["dt"])))
+            st["n_steps"] = int(math.ceil(sc["pack"]["max_time"] * der["T0"] / der["dt"]))
+            st["fine_end"] = 0
+        else:
+            prev = os.path.join(self.case_dir, f"{PREVIOUS[self.stage]}.final.yade.gz")
+            if not os.path.exists(prev):
+                raise InputError(f"missing input {prev}: run stage {PREVIOUS[self.stage]} first")
+            O.load(prev)
+            self.lay = build.layout()
+            pst = json.loads(O.tags["ys_state"])
+            if pst.get("scene_sha256") != self.hash:
+                print(f"[{self.stage}] warning: {prev} was made from another scene file", flush=True)
+            st.update(dt=pst["dt"], t_origin=pst["t_origin"], strain=pst["strain"], iter0=O.iter,
+                      time0=O.time, load=der["p"] * der["W"] * der["d"])
+            if self.stage == "preshear":
+                st["t_origin"] = O.time
+                st["strain"] = 0.0
+            st["strain_start"], st["t_start"] = st["strain"], (O.time - st["t_origin"]) / der["T0"]
+            strain_len = sc[self.stage]["strain"]
+            st["n_steps"] = int(math.ceil(strain_len * steps_per_strain))
+            st["n_transition"] = 0
+            if self.stage == "sinusoidal":
+                st["n_transition"] = int(math.ceil(sc["sinusoidal"]["transition_strain"] * steps_per_strain))
+            st["fine_end"] = O.iter + st["n_transition"] + int(math.ceil(smp["fine_window"] * steps_per_strain))
+            st["every"] = st["fine_every"]
+            U = der["U"]
+            if self.stage == "preshear":
+                build.set_wall_speeds(self.lay, U, -U)
+            elif self.stage == "heaviside":
+                build.set_wall_speeds(self.lay, -U, U)
+            else:
+                build.set_wall_speeds(self.lay, U, -U)  # the half cosine starts at +U
+        w = measure.walls(self.lay)
+        st["x_rel"] = w["x_top"] - w["x_bot"]
+        st["gap"] = w["y_top"] - w["y_bot"]
+        st["last_sample_iter"] = -1
+        st["scene_sha256"] = self.hash
+        self.st = st
+
+    def _install_engines(self):
+        st = self.st
+        builtins._ys_sample = self.sample
+        builtins._ys_wall = self.wall_speed
+        every = st["every"]
+        if self.stage != "pack" and O.iter >= st["fine_end"]:
+            every = st["coarse_every"]
+        remaining_transition = 0
+        if self.stage == "sinusoidal":
+            remaining_transition = max(0, st["iter0"] + st["n_transition"] + 1 - O.iter)
+        O.engines = engines.build(self.scene, every, "_ys_sample()",
+                                  "_ys_wall()" if remaining_transition else None, remaining_transition)
+        sampler = O.engines[-1]
+        sampler.iterLast = O.iter  # the next sample is `every` steps after the current state
+        self.sampler = sampler
+        self.engine_names = engines.describe(O.engines)
+
+    # ------------------------------------------------------------ per sample
+    def wall_speed(self):
+        """Half cosine from +U to -U over the transition, then -U (sinusoidal only)."""
+        st = self.st
+        k = O.iter + 1 - st["iter0"]
+        x = min(1.0, k / st["n_transition"])
+        u = self.der["U"] * math.cos(math.pi * x)
+        build.set_wall_speeds(self.lay, u, -u)
+
+    def sample(self):
+        try:
+            self._sample()
+        except BaseException as e:  # never let YADE swallow it: stop and re-raise in the main thread
+            self.error = e
+            O.pause()
+
+    def _row(self, w):
+        der, st = self.der, self.st
+        d, p, T0, V0, W = der["d"], der["p"], der["T0"], der["V0"], der["W"]
+        gap = w["y_top"] - w["y_bot"]
+        x_rel = w["x_top"] - w["x_bot"]
+        st["strain"] += (x_rel - st["x_rel"]) / (0.5 * (gap + st["gap"]))
+        st["x_rel"], st["gap"] = x_rel, gap
+        gd = (w["u_top"] - w["u_bot"]) / gap
+        sxy = (w["fx_bot"] - w["fx_top"]) / (2 * W * d) / p
+        pw = (w["fy_top"] - w["fy_bot"]) / (2 * W * d) / p
+        row = dict(t=(O.time - st["t_origin"]) / T0, strain=st["strain"], gammadot=gd * T0,
+                   U_top=w["u_top"] / V0, U_bottom=w["u_bot"] / V0, gap=gap / d, sigma_xy=sxy, p=pw,
+                   mu=abs(sxy) / pw if pw > 0 else math.nan,
+                   inertial_number=abs(gd) * T0 / math.sqrt(pw) if pw > 0 else math.nan)
+        for k in ("A_xx", "A_xy", "n_contacts", "sigma_xy_bulk", "p_bulk", "phi", "Z"):
+            row[k] = math.nan
+        ys = None
+        if self.scene["effects"]["measurements"]:
+            excl = self.scene["sampling"]["bulk_exclusion_d"] * d
+            b = self.bulk.measure(self.lay, w["y_bot"] + excl, w["y_top"] - excl, W)
+            ys = b.pop("ys")
+            b["sigma_xy_bulk"] /= p
+            b["p_bulk"] /= p
+            row.update(b)
+        return row, ys, pw, gd
+
+    def _sample(self):
+        if O.iter == self.st["last_sample_iter"]:
+            return
+        der, st, sc = self.der, self.st, self.scene
+        w = measure.walls(self.lay)
+        row, ys, pw, gd = self._row(w)
+        extra = []
+        if self.stage == "pack":
+            ke_mean = self._ke_mean()
+            wall_speed = abs(w["v_top"]) / der["V0"]
+            row_load = st["load"] / (der["p"] * der["W"] * der["d"])
+            extra = [ke_mean, wall_speed, row_load]
+        self._guards(row, ys, w)
+        self.csv.write(",".join(_fmt(row[c]) for c in measure.COLUMNS)
+                       + "".join("," + _fmt(x) for x in extra) + "\n")
+        st["rows"] += 1
+        st["last_sample_iter"] = O.iter
+        if self.stage == "pack":
+            self._pack_control(ke_mean, wall_speed, pw)
+        else:
+            st["sum_p"] += pw
+            st["sum_gap"] = st.get("sum_gap", 0.0) + row["gap"]
+            st["sum_gd"] += abs(gd) * der["T0"]
+            st["n_acc"] += 1
+            if O.iter >= st["fine_end"] and self.sampler.iterPeriod != st["coarse_every"]:
+                self.sampler.iterPeriod = st["coarse_every"]
+        now = time.time()
+        if now - self.last_progress >= sc["run"]["progress_every_s"]:
+            self.progress(now)
+        if now - self.last_checkpoint >= sc["run"]["checkpoint_every_s"] and not self.done:
+            self.checkpoint()
+
+    def _ke_mean(self):
+        """Mean squared grain velocity (translation only: a free rattler may spin for ever), in p/rho."""
+        v2 = 0.0
+        for i in range(self.lay["N"]):
+            v2 += O.bodies[i].state.vel.squaredNorm()
+        return v2 / self.lay["N"] / self.der["V0"] ** 2
+
+    def _pack_control(self, ke, wall_speed, pw):
+        st, pk, der = self.st, self.scene["pack"], self.der
+        full = der["p"] * der["W"] * der["d"]
+        settled = ke < pk["ke_max"] and wall_speed < pk["wall_speed_max"]
+        if st["phase"] == "compress":
+            # the wall has stopped on a jammed packing (a looser kinetic criterion: the
+            # low compaction load makes the last rattlers slow to calm down)
+            if wall_speed < pk["wall_speed_max"] and ke < 100 * pk["ke_max"]:
+                st["phase"] = "ramp"
+                st["ramp_start"] = O.time
+                print(f"[pack] jammed at the compaction load, t = {O.time / der['T0']:.1f}: ramping to p", flush=True)
+        if st["phase"] == "ramp":
+            f0 = pk["compaction_pressure"] * full
+            x = min(1.0, (O.time - st["ramp_start"]) / (pk["ramp_time"] * der["T0"]))
+            st["load"] = f0 + (full - f0) * x
+            build.set_wall_load(self.lay, st["load"])
+            if x >= 1.0:
+                st["phase"] = "settle"
+                st["pack_ok"] = 0
+        elif st["phase"] == "settle":
+            ok = settled and abs(pw - 1) < pk["pressure_tolerance"]
+            st["pack_ok"] = st["pack_ok"] + 1 if ok else 0
+            if st["pack_ok"] >= 2:
+                st["converged_at_t"] = O.time / der["T0"]
+                self.done = True
+                O.pause()
+
+    def _guards(self, row, ys, w):
+        st, g, der = self.st, self.scene["guards"], self.der
+        d = der["d"]
+        vals = [row[k] for k in ("strain", "sigma_xy", "p", "gap")] + [w["fx_top"], w["fy_top"]]
+        if ys is None:
+            ys = np.asarray(measure.yu.coordsAndDisplacements(1)[0][: self.lay["N"]])
+        if not all(math.isfinite(v) for v in vals) or not np.all(np.isfinite(ys)):
+            raise GuardError(f"NaN in positions or forces at iteration {O.iter} (t = {row['t']:.4f})")
+        out = np.nonzero((ys < w["y_bot"]) | (ys > w["y_top"]))[0]
+        if len(out):
+            raise GuardError(f"disk {int(out[0])} left the cell at iteration {O.iter} "
+                             f"(y = {ys[out[0]] / d:.3f} d, walls at {w['y_bot'] / d:.3f} d and {w['y_top'] / d:.3f} d)")
+        smax = self.scene["material"]["size_ratio_max"]
+        if measure.max_overlap_d(d, smax) > g["max_overlap_d"]:
+            ov = measure.exact_max_overlap_d(d)
+            if ov > g["max_overlap_d"]:
+                raise GuardError(f"overlap {ov:.4f} d above guards.max_overlap_d = {g['max_overlap_d']:g} "
+                                 f"at iteration {O.iter} (t = {row['t']:.4f})")
+        if self.stage != "pack":
+            elapsed = (O.iter - st["iter0"]) * der["dt"] * der["gammadot"]
+            win = st["window"]
+            win.append([elapsed, row["p"]])
+            span = g["pressure_window_strain"]
+            while win and win[0][0] < elapsed - span:
+                win.pop(0)
+            if elapsed >= span and len(win) >= 3:
+                pm = sum(x[1] for x in win) / len(win)
+                if abs(pm - 1) > g["pressure_tolerance"]:
+                    raise GuardError(f"wall pressure {pm:.4f} p on average over the last {span:g} strain, "
+                                     f"off by more than guards.pressure_tolerance = {g['pressure_tolerance']:g}")
+
+    def progress(self, now):
+        st = self.st
+        done = O.iter - st["iter0"]
+        pct = 100.0 * done / st["n_steps"]
+        elapsed = now - self.t_wall0
+        steps = O.iter - self.iter_wall0
+        rate = steps / elapsed if elapsed > 0 else 0.0
+        pps = rate * self.lay["N"]
+        eta = (st["n_steps"] - done) / rate if rate > 0 else float("nan")
+        what = f"phase {st['phase']}" if self.stage == "pack" else f"strain {st['strain']:.4f}"
+        print(f"[{self.stage}] {what} | {pct:5.1f}% | t {(O.time - st['t_origin']) / self.der['T0']:.2f} | "
+              f"{pps:.3g} particle-steps/s | ETA {eta:.0f} s" + (" (at most)" if self.stage == "pack" else ""),
+              flush=True)
+        self.last_progress = now
+
+    # ----------------------------------------------------------- checkpoints
+    def checkpoint(self):
+        st = self.st
+        self.csv.flush()
+        os.fsync(self.csv.fileno())
+        now = time.time()
+        st["wall_time"] += now - self.t_wall0
+        self.t_wall0, self.iter_wall0 = now, O.iter
+        name = "ckpt_a.yade.gz" if st.get("ckpt") != "ckpt_a.yade.gz" else "ckpt_b.yade.gz"
+        st["ckpt"] = name
+        O.tags["ys_state"] = json.dumps(st)
+        O.save(os.path.join(self.partial, name))
+        _atomic_json(self.resume_path, dict(checkpoint=name, rows=st["rows"], iter=O.iter,
+                                            scene_sha256=self.hash))
+        self.last_checkpoint = now
+        print(f"[{self.stage}] checkpoint at iteration {O.iter} ({st['rows']} rows)", flush=True)
+
+    # ------------------------------------------------------------------- run
+    def run(self):
+        st = self.st
+        if st["rows"] == 0 and self.stage != "pack":
+            self._sample()  # the state the stage starts from (t = reversal time for a reversal)
+        remaining = st["n_steps"] - (O.iter - st["iter0"])
+        if remaining > 0 and not self.done:
+            O.run(remaining, True)
+        if self.error is not None:
+            raise self.error
+        if self.stage == "pack" and not self.done:
+            raise GuardError(f"packing not converged within pack.max_time = {self.scene['pack']['max_time']:g} "
+                             f"(phase {st['phase']}; see pack.csv columns ke, wall_speed, p)")
+        self._sample()  # the final state is always sampled (no-op if just sampled)
+        if self.error is not None:
+            raise self.error
+        self.finish()
+
+    def finish(self):
+        st, der, sc = self.st, self.der, self.scene
+        self.csv.flush()
+        os.fsync(self.csv.fileno())
+        self.csv.close()
+        st["wall_time"] += time.time() - self.t_wall0
+        O.tags["ys_state"] = json.dumps(st)
+        final_tmp = os.path.join(self.partial, "final.yade.gz")
+        O.save(final_tmp)
+        side = self.sidecar()
+        os.replace(final_tmp, os.path.join(self.case_dir, f"{self.stage}.final.yade.gz"))
+        os.replace(self.csv_path, os.path.join(self.case_dir, f"{self.stage}.csv"))
+        _atomic_json(os.path.join(self.case_dir, f"{self.stage}.json"), side)
+        shutil.rmtree(self.partial, ignore_errors=True)
+        try:
+            os.rmdir(os.path.join(self.case_dir, ".partial"))
+        except OSError:
+            pass
+        print(f"[{self.stage}] done: {st['rows']} samples, {O.iter - st['iter0']} steps, "
+              f"{side['wall_time_s']:.1f} s, {side['particle_steps_per_s']:.3g} particle-steps/s", flush=True)
+
+    def sidecar(self):
+        st, der, sc = self.st, self.der, self.scene
+        d, p, T0 = der["d"], der["p"], der["T0"]
+        w = measure.walls(self.lay)
+        steps = O.iter - st["iter0"]
+        n_p = max(1, st["n_acc"])
+        p_mean = st["sum_p"] / n_p if st["n_acc"] else math.nan
+        out = dict(
+            stage=self.stage, scene=sc, scene_sha256=self.hash, seed=sc["seed"], N=self.lay["N"],
+            N_wall=self.lay["n_wall"], dt=st["dt"], dt_over_tc=st["dt"] / der["tc"], kn=der["kn"], kt=der["kt"],
+            kappa=sc["material"]["kappa"], inertial_number=sc["loading"]["inertial_number"],
+            U=der["U"], gammadot_nominal=der["gammadot"], time_unit_s=T0,
+            steps=steps, samples=st["rows"], engines=self.engine_names,
+            yade_version=yade.config.version, wall_time_s=st["wall_time"],
+            particle_steps_per_s=self.lay["N"] * steps / st["wall_time"] if st["wall_time"] > 0 else math.nan,
+            resumed=st["resumed"], t_end=(O.time - st["t_origin"]) / T0, strain_end=st["strain"],
+            gap_end=(w["y_top"] - w["y_bot"]) / d,
+            sampling_steps=dict(fine=st["fine_every"], coarse=st["coarse_every"], every=st["every"]),
+            columns=self.columns())
+        if self.stage == "pack":
+            excl = sc["sampling"]["bulk_exclusion_d"] * d
+            b = self.bulk.measure(self.lay, w["y_bot"] + excl, w["y_top"] - excl, der["W"])
+            pw = (w["fy_top"] - w["fy_bot"]) / (2 * der["W"] * d) / p
+            out.update(phi=b["phi"], gap=out["gap_end"], converged_at_t=st.get("converged_at_t"),
+                       p_wall_end=pw, kappa_achieved=der["kn"] / (pw * p * d))
+        else:
+            out.update(strain_start=st["strain_start"], t_start=st["t_start"], p_wall_mean=p_mean,
+                       kappa_achieved=der["kn"] / (p_mean * p * d),
+                       inertial_number_achieved=(st["sum_gd"] / n_p) / math.sqrt(p_mean),
+                       gap_mean=st.get("sum_gap", math.nan) / n_p)
+            if self.stage in ("heaviside", "sinusoidal"):
+                out.update(reversal_strain=st["strain_start"], reversal_t=st["t_start"])
+            if self.stage == "sinusoidal":
+                out["transition_steps"] = st["n_transition"]
+        return out
