@@ -8,9 +8,18 @@ def calibration_sets():
 
     A set may restrict protocols and pick pressures / inertial numbers; "all"
     (or a missing key) keeps every value of the campaign. The set "all" always
-    exists: every case and every protocol.
+    exists: every case and every protocol; so do one set per pressure and one
+    per inertial number when the campaign has several.
     """
     sets = {"all": {}}
+    # With several loadings, one set per pressure and per inertial number: the
+    # held-out comparison calibrates on one and predicts the others.
+    pressures = sorted({case["pressure"] for case in CASES.values()})
+    rates = sorted({case["inertial_number"] for case in CASES.values()})
+    if len(pressures) > 1:
+        sets.update({f"p{_fmt(p)}": {"pressures": [p]} for p in pressures})
+    if len(rates) > 1:
+        sets.update({f"I{_fmt(I)}": {"inertial_numbers": [I]} for I in rates})
     sets.update(config.get("calibration", {}).get("sets", {}))
     out = {}
     for name, spec in sets.items():

@@ -65,4 +65,4 @@ def all_targets():
 
 
 wildcard_constraints:
-    calset="[A-Za-z0-9-]+(_[A-Za-z0-9-]+)*",
+    calset="[A-Za-z0-9.-]+(_[A-Za-z0-9.-]+)*",
