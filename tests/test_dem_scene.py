@@ -1,0 +1,113 @@
+"""Scene validation, engine lists and the two-disk restitution, with real YADE."""
+import copy
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+YS = ROOT / "yade_scripts"
+sys.path.insert(0, str(YS))
+import scene as scenemod  # noqa: E402  (pure Python, no YADE)
+
+TINY = json.loads((YS / "examples" / "tiny.json").read_text())
+
+
+def yade(*args, cwd=None, timeout=300):
+    env = dict(os.environ, OMP_NUM_THREADS="1")
+    return subprocess.run(["yade", "-n", "-x", *map(str, args)], capture_output=True, text=True,
+                          cwd=cwd, timeout=timeout, env=env)
+
+
+def write(tmp_path, sc, name="scene.json"):
+    p = tmp_path / name
+    p.write_text(json.dumps(sc))
+    return p
+
+
+def test_example_scene_is_valid():
+    sc = scenemod.validate(TINY, "sinusoidal")
+    der = scenemod.derived(sc)
+    assert 100 < der["N"] < 300 and der["n_wall"] == 32
+
+
+@pytest.mark.parametrize("mutate, key", [
+    (lambda s: s["material"].pop("kappa"), "material.kappa"),
+    (lambda s: s["material"].__setitem__("kappa", 5.0), "material.kappa"),
+    (lambda s: s["material"].__setitem__("restitution", 1.0), "material.restitution"),
+    (lambda s: s["geometry"].__setitem__("H_over_d", "37"), "geometry.H_over_d"),
+    (lambda s: s["sampling"].__setitem__("fine_intervall", 0.001), "sampling.fine_intervall"),
+    (lambda s: s.__setitem__("colour", "red"), "colour"),
+    (lambda s: s.pop("seed"), "seed"),
+    (lambda s: s["effects"].__setitem__("gravity", [0, -9.81, 1]), "effects.gravity"),
+    (lambda s: s["effects"].__setitem__("measurements", 1), "effects.measurements"),
+    (lambda s: s["sampling"].__setitem__("bulk_exclusion_d", 4), "bulk_exclusion_d"),
+])
+def test_bad_scene_names_the_key(mutate, key):
+    sc = copy.deepcopy(TINY)
+    mutate(sc)
+    with pytest.raises(scenemod.SceneError, match=key.replace(".", r"\.")):
+        scenemod.validate(sc)
+
+
+def test_stage_needs_its_section():
+    sc = copy.deepcopy(TINY)
+    sc.pop("sinusoidal")
+    scenemod.validate(sc, "heaviside")
+    with pytest.raises(scenemod.SceneError, match="sinusoidal"):
+        scenemod.validate(sc, "sinusoidal")
+
+
+def test_bad_scene_stops_yade_before_building(tmp_path):
+    sc = copy.deepcopy(TINY)
+    sc["material"]["friction"] = -0.1
+    r = yade(YS / "run_stage.py", write(tmp_path, sc), "pack", tmp_path / "case")
+    assert r.returncode == 2, r.stdout + r.stderr
+    assert "material.friction" in r.stderr
+    assert not (tmp_path / "case").exists()  # nothing built, nothing written
+    r = yade(YS / "run_stage.py", write(tmp_path, TINY), "preshear", tmp_path / "case")
+    assert r.returncode == 2 and "pack.final.yade.gz" in r.stderr  # missing input named
+
+
+ENGINE_CASES = [
+    ({}, "preshear", ["ForceResetter", "InsertionSortCollider",
+                      "InteractionLoop[Ig2_Sphere_Sphere_ScGeom,Ip2_ViscElMat_ViscElMat_ViscElPhys,"
+                      "Law2_ScGeom_ViscElPhys_Basic]", "NewtonIntegrator", "PyRunner(sampler)"]),
+    ({"gravity": [0, -9.81], "damping": 0.2}, "preshear",
+     ["ForceResetter", "InsertionSortCollider",
+      "InteractionLoop[Ig2_Sphere_Sphere_ScGeom,Ip2_ViscElMat_ViscElMat_ViscElPhys,Law2_ScGeom_ViscElPhys_Basic]",
+      "GravityEngine", "NewtonIntegrator(damping=0.2)", "PyRunner(sampler)"]),
+    ({"rolling_resistance": 0.1}, "heaviside",
+     ["ForceResetter", "InsertionSortCollider",
+      "InteractionLoop[Ig2_Sphere_Sphere_ScGeom6D,Ip2_ViscElMat_ViscElMat_ViscElPhys,Law2_ScGeom_ViscElPhys_Basic]",
+      "NewtonIntegrator", "PyRunner(sampler)"]),
+    ({}, "sinusoidal", ["ForceResetter", "InsertionSortCollider",
+                        "InteractionLoop[Ig2_Sphere_Sphere_ScGeom,Ip2_ViscElMat_ViscElMat_ViscElPhys,"
+                        "Law2_ScGeom_ViscElPhys_Basic]", "NewtonIntegrator", "PyRunner(wallspeed)",
+                        "PyRunner(sampler)"]),
+]
+
+
+@pytest.mark.parametrize("effects, stage, expected", ENGINE_CASES)
+def test_engine_list_holds_only_declared_effects(tmp_path, effects, stage, expected):
+    sc = copy.deepcopy(TINY)
+    sc["effects"] = effects
+    r = yade(YS / "show_engines.py", write(tmp_path, sc), stage)
+    assert r.returncode == 0, r.stderr
+    line = [ln for ln in r.stdout.splitlines() if ln.startswith("ENGINES ")][0]
+    assert json.loads(line[len("ENGINES "):]) == expected
+
+
+def test_restitution_at_the_chosen_time_step(tmp_path):
+    """Two disks of diameter d rebound with e = 0.5 within 0.03 at dt = 0.1 sqrt(m_d/kn)."""
+    out = tmp_path / "e.json"
+    r = yade(YS / "restitution.py", YS / "examples" / "tiny.json", out)
+    assert r.returncode == 0, r.stderr
+    res = json.loads(out.read_text())
+    assert res["dt_over_tc"] == 0.1
+    e = {(p["D1"], p["D2"]): p["e"] for p in res["pairs"]}
+    assert abs(e[(1.0, 1.0)] - 0.5) < 0.03, e
+    assert all(0.42 < v < 0.55 for v in e.values()), e  # smaller pairs see a relatively coarser step

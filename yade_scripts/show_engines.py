@@ -1,0 +1,18 @@
+"""Print the engine list a scene gives for a stage, without running it.
+
+yade -n -x yade_scripts/show_engines.py <scene.json> <stage>
+Prints one line: ENGINES <json list of engine names> (see engines.describe).
+"""
+import json
+import os
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(sys.argv[0])))
+
+import scene as scenemod  # noqa: E402
+
+scene, _ = scenemod.load(sys.argv[1], sys.argv[2])
+import engines  # noqa: E402
+
+wall = "pass" if sys.argv[2] == "sinusoidal" else None
+print("ENGINES " + json.dumps(engines.describe(engines.build(scene, 100, "pass", wall, 10))), flush=True)
