@@ -20,6 +20,10 @@ from yade.wrapper import Omega, ViscElMat
 O = Omega()
 
 
+class PlacementError(RuntimeError):
+    pass
+
+
 def contact_material(scene, radius):
     """ViscElMat for a disk of this radius: young = kn/(2R)*2... so that 2*E*R = 2 kn.
 
@@ -55,17 +59,19 @@ def loose_placement(rnd, diameters, W, y_lo, y_hi):
     nx = max(1, int(W // cell))
     cw = W / nx
     grid = {}
-    pos = []
-    for i, D in enumerate(diameters):
+    pos = [None] * len(diameters)
+    # largest first: random sequential placement then reaches denser loose states
+    for i in sorted(range(len(diameters)), key=lambda k: -diameters[k]):
+        D = diameters[i]
         r = D / 2
-        for _ in range(100000):
+        for _ in range(20000):
             x = rnd.uniform(0, W)
             y = rnd.uniform(y_lo + r, y_hi - r)
             ix, iy = int(x // cw) % nx, int((y - y_lo) // cell)
             ok = True
             for jx in (ix - 1, ix, ix + 1):
                 for jy in (iy - 1, iy, iy + 1):
-                    for j in grid.get((jx % nx, jy), ()):
+                    for j in grid.get((jx % nx, jy), ()):  # noqa: B007
                         xj, yj = pos[j]
                         dx = x - xj
                         dx -= W * round(dx / W)
@@ -78,10 +84,10 @@ def loose_placement(rnd, diameters, W, y_lo, y_hi):
                     break
             if ok:
                 grid.setdefault((ix, iy), []).append(i)
-                pos.append((x, y))
+                pos[i] = (x, y)
                 break
         else:
-            raise RuntimeError("loose placement failed: lower pack.initial_solid_fraction")
+            raise PlacementError("loose placement failed: lower pack.initial_solid_fraction")
     return pos
 
 

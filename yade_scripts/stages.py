@@ -117,7 +117,10 @@ class Stage:
         st["fine_every"] = max(1, int(round(smp["fine_interval"] * steps_per_strain)))
         st["coarse_every"] = max(st["fine_every"], int(round(smp["coarse_interval"] * steps_per_strain)))
         if self.stage == "pack":
-            self.lay = build.new_cell(sc, der)
+            try:
+                self.lay = build.new_cell(sc, der)
+            except build.PlacementError as e:
+                raise InputError(str(e))
             st.update(dt=der["dt"], t_origin=0.0, strain=0.0, iter0=0, time0=0.0, phase="compress",
                       load=sc["pack"]["compaction_pressure"] * der["p"] * der["W"] * der["d"])
             st["every"] = max(1, int(round(sc["pack"]["check_interval"] * der["T0"] / der["dt"])))
@@ -350,8 +353,8 @@ class Stage:
     # ------------------------------------------------------------------- run
     def run(self):
         st = self.st
-        if st["rows"] == 0 and self.stage != "pack":
-            self._sample()  # the state the stage starts from (t = reversal time for a reversal)
+        # no row at the start itself: contact forces are not saved with a state, so the
+        # first row comes one sampling interval in (the sidecar has the start's t and strain)
         remaining = st["n_steps"] - (O.iter - st["iter0"])
         if remaining > 0 and not self.done:
             O.run(remaining, True)

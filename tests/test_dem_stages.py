@@ -1,0 +1,216 @@
+"""The four stages on a tiny soft cell with real YADE: outputs, physics, guards,
+reproducibility and kill-and-resume.
+
+The cell: H = 8d, W = 4H (about 210 disks), kappa = 1e3, I = 1e-2. One module
+fixture runs pack -> preshear -> heaviside, sinusoidal once (about a minute).
+"""
+import copy
+import json
+import os
+import shutil
+import signal
+import subprocess
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+YS = ROOT / "yade_scripts"
+RUN = YS / "run_stage.py"
+COLUMNS = ["t", "strain", "gammadot", "U_top", "U_bottom", "gap", "A_xx", "A_xy", "n_contacts", "sigma_xy",
+           "p", "mu", "sigma_xy_bulk", "p_bulk", "phi", "Z", "inertial_number"]
+
+
+def make_scene():
+    sc = json.loads((YS / "examples" / "tiny.json").read_text())
+    sc["pack"].update(initial_solid_fraction=0.45, ke_max=1e-6, ramp_time=10)
+    sc["preshear"]["strain"] = 1.2
+    sc["heaviside"]["strain"] = 0.4
+    sc["sinusoidal"].update(strain=0.3, transition_strain=0.1)
+    sc["run"].update(checkpoint_every_s=1000, progress_every_s=5)
+    return sc
+
+
+def yade(*args, timeout=600):
+    env = dict(os.environ, OMP_NUM_THREADS="1")
+    return subprocess.run(["yade", "-n", "-x", *map(str, args)], capture_output=True, text=True,
+                          timeout=timeout, env=env)
+
+
+def read(path):
+    return np.genfromtxt(path, delimiter=",", names=True)
+
+
+def fabric(a, b):
+    return np.sqrt(2 * (a * a + b * b)), np.degrees(np.arctan2(b, a) / 2) % 180
+
+
+@pytest.fixture(scope="module")
+def case(tmp_path_factory):
+    root = tmp_path_factory.mktemp("dem")
+    scene = root / "scene.json"
+    scene.write_text(json.dumps(make_scene()))
+    cdir = root / "case"
+    for stage in ("pack", "preshear", "heaviside", "sinusoidal"):
+        r = yade(RUN, scene, stage, cdir)
+        assert r.returncode == 0, f"{stage}: {r.stdout[-2000:]}\n{r.stderr[-2000:]}"
+    return dict(dir=cdir, scene=scene, root=root)
+
+
+@pytest.mark.parametrize("stage", ["pack", "preshear", "heaviside", "sinusoidal"])
+def test_every_stage_writes_the_contract(case, stage):
+    d = case["dir"]
+    for suffix in (".csv", ".json", ".final.yade.gz"):
+        assert (d / f"{stage}{suffix}").is_file()
+    assert not (d / ".partial").exists()  # work files gone once the stage completes
+    header = (d / f"{stage}.csv").read_text().splitlines()[0].split(",")
+    assert header[: len(COLUMNS)] == COLUMNS
+    r = read(d / f"{stage}.csv")
+    assert len(r) > 10
+    assert np.all(np.diff(r["t"]) > 0)
+    side = json.loads((d / f"{stage}.json").read_text())
+    for k in ("scene", "seed", "N", "dt", "kappa_achieved", "yade_version", "wall_time_s", "particle_steps_per_s",
+              "samples", "engines"):
+        assert k in side, k
+    assert side["samples"] == len(r)
+    assert abs(side["kappa_achieved"] / 1e3 - 1) < 0.05
+    if stage != "pack":
+        if stage != "sinusoidal":  # slower through the transition
+            assert abs(side["inertial_number_achieved"] / 1e-2 - 1) < 0.1
+        for k in COLUMNS:
+            assert np.all(np.isfinite(r[k])), k
+    if stage in ("heaviside", "sinusoidal"):
+        pre = json.loads((d / "preshear.json").read_text())
+        assert side["reversal_strain"] == pytest.approx(pre["strain_end"])
+        assert side["reversal_t"] == pytest.approx(pre["t_end"])
+        assert abs(r["strain"][0] - pre["strain_end"]) < 0.003  # first row one fine interval in
+        assert r["strain"][-1] < r["strain"][0]  # strain falls after the reversal
+
+
+def test_sampling_is_fine_after_reversal_and_coarse_later(case):
+    r = read(case["dir"] / "heaviside.csv")
+    s0 = r["strain"][0]
+    ds = np.abs(np.diff(r["strain"]))
+    travelled = np.abs(r["strain"][1:] - s0)
+    assert ds[travelled < 0.09].max() < 0.0025  # fine_interval 0.002 at the nominal rate
+    assert ds[travelled > 0.15].min() > 0.008  # coarse_interval 0.01
+
+
+def test_wall_pressure_holds_p(case):
+    r = read(case["dir"] / "preshear.csv")
+    assert abs(r["p"].mean() - 1) < 0.02
+    side = json.loads((case["dir"] / "preshear.json").read_text())
+    assert abs(side["p_wall_mean"] - 1) < 0.02
+
+
+def test_steady_preshear(case):
+    r = read(case["dir"] / "preshear.csv")
+    s = r["strain"] > 0.5
+    mu = r["mu"][s].mean()
+    normA, theta = fabric(r["A_xx"][s].mean(), r["A_xy"][s].mean())
+    print(f"steady pre-shear: mu = {mu:.3f}, |A| = {normA:.3f}, theta_A = {theta:.1f} deg")
+    assert 0.2 < mu < 0.35
+    assert 0.03 < normA < 0.15
+    assert 100 < theta < 150
+    assert np.all(r["gammadot"][1:] > 0) and abs(r["inertial_number"][s].mean() / 1e-2 - 1) < 0.1
+    # bulk stress (Love-Weber over the band) agrees with the walls on average
+    assert abs(r["sigma_xy_bulk"][s].mean() - r["sigma_xy"][s].mean()) < 0.05
+    assert abs(r["p_bulk"][s].mean() - 1) < 0.1
+
+
+def test_heaviside_fabric_turns(case):
+    r = read(case["dir"] / "heaviside.csv")
+    end = r["strain"] < r["strain"][-1] + 0.1
+    normA, theta = fabric(r["A_xx"][end].mean(), r["A_xy"][end].mean())
+    print(f"after Heaviside: |A| = {normA:.3f}, theta_A = {theta:.1f} deg")
+    assert 30 < theta < 80
+    assert np.all(r["gammadot"][1:] < 0)
+    assert r["sigma_xy"][end].mean() < 0
+
+
+def test_sinusoidal_wall_speed_follows_half_cosine(case):
+    r = read(case["dir"] / "sinusoidal.csv")
+    sc = make_scene()
+    U = sc["loading"]["inertial_number"] * sc["geometry"]["H_over_d"] / 2  # in sqrt(p/rho)
+    T = sc["sinusoidal"]["transition_strain"] / sc["loading"]["inertial_number"]  # in d sqrt(rho/p)
+    tau = r["t"] - json.loads((case["dir"] / "sinusoidal.json").read_text())["reversal_t"]
+    expect = np.where(tau < T, U * np.cos(np.pi * np.clip(tau / T, 0, 1)), -U)
+    assert np.allclose(r["U_top"], expect, atol=U * 0.02)
+    assert np.allclose(r["U_bottom"], -r["U_top"])
+
+
+def test_same_seed_same_packing(tmp_path):
+    sc = make_scene()
+    sc["geometry"].update(H_over_d=5, W_over_H=2)
+    sc["sampling"]["bulk_exclusion_d"] = 1
+    outs = []
+    for seed, name in ((7, "a"), (7, "b"), (8, "c")):
+        sc["seed"] = seed
+        p = tmp_path / f"{name}.json"
+        p.write_text(json.dumps(sc))
+        r = yade(RUN, p, "pack", tmp_path / name)
+        assert r.returncode == 0, r.stderr[-2000:]
+        outs.append((tmp_path / name / "pack.csv").read_text())
+    assert outs[0] == outs[1]
+    assert outs[0] != outs[2]
+
+
+def _case_from_pack(case, tmp_path, **changes):
+    cdir = tmp_path / "case"
+    cdir.mkdir()
+    for f in ("pack.final.yade.gz", "pack.json"):
+        shutil.copy(case["dir"] / f, cdir / f)
+    sc = make_scene()
+    for sec, kv in changes.items():
+        sc[sec].update(kv)
+    p = tmp_path / "scene.json"
+    p.write_text(json.dumps(sc))
+    return p, cdir
+
+
+@pytest.mark.parametrize("guard, match", [
+    (dict(guards=dict(max_overlap_d=1e-4)), "overlap"),
+    (dict(guards=dict(pressure_tolerance=1e-3, pressure_window_strain=0.02)), "wall pressure"),
+])
+def test_guards_stop_the_run(case, tmp_path, guard, match):
+    scene, cdir = _case_from_pack(case, tmp_path, **guard)
+    r = yade(RUN, scene, "preshear", cdir)
+    assert r.returncode == 3, r.stdout[-1000:] + r.stderr[-1000:]
+    assert match in r.stderr
+    assert not (cdir / "preshear.csv").exists()  # no half outputs
+
+
+def test_killed_stage_resumes_without_gap_or_duplicate(case, tmp_path):
+    scene, cdir = _case_from_pack(case, tmp_path, preshear=dict(strain=2.5), run=dict(checkpoint_every_s=1))
+    resume = cdir / ".partial" / "preshear" / "resume.json"
+    env = dict(os.environ, OMP_NUM_THREADS="1")
+    proc = subprocess.Popen(["yade", "-n", "-x", str(RUN), str(scene), "preshear", str(cdir)],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
+    try:
+        t0 = time.time()
+        while not resume.exists():
+            assert proc.poll() is None, "the stage ended before its first checkpoint"
+            assert time.time() - t0 < 120
+            time.sleep(0.1)
+        time.sleep(0.7)  # rows past the checkpoint get written, then are lost with the kill
+        assert proc.poll() is None, "the stage ended before it could be killed"
+        proc.send_signal(signal.SIGKILL)
+        proc.wait()
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert not (cdir / "preshear.csv").exists()
+    r = yade(RUN, scene, "preshear", cdir)
+    assert r.returncode == 0, r.stderr[-2000:]
+    assert "resumed from" in r.stdout
+    side = json.loads((cdir / "preshear.json").read_text())
+    assert side["resumed"] == 1
+    s = read(cdir / "preshear.csv")
+    t, strain = s["t"], s["strain"]
+    assert np.all(np.diff(t) > 0) and np.all(np.diff(strain) > 0)  # no duplicate, no reordering
+    sc = make_scene()
+    dt_coarse = sc["sampling"]["coarse_interval"] / sc["loading"]["inertial_number"]
+    assert np.diff(t).max() <= dt_coarse * 1.001  # no gap
+    assert strain[-1] == pytest.approx(2.5, rel=0.05)
