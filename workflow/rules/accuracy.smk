@@ -23,8 +23,170 @@ rule ode_work_precision:
         "{PY} -m model.work_precision --out {RESULTS}/accuracy > {log} 2>&1"
 
 
+# --- DEM resolution study ------------------------------------------------------
+# One factor at a time around accuracy.base (dem_study/grid.py): each point is a
+# DEM case under {RESULTS}/accuracy/dem/<point>/, run by the same YADE stages as
+# the campaign (pack -> preshear -> heaviside), with the campaign's scene
+# (write_scene.scene_from_config) changed in one key.
+#
+# Cost of the default subset of config/config.yaml, estimated from DESIGN.md's
+# throughput (1.5 M particle-steps/s at 500 disks, 0.8 M at 5,000, one thread),
+# steps per unit strain sqrt(4 kappa/pi)/(I dt_over_tc) over 1.9 strain, plus a
+# pack of 665 time units (measured): 16 DEM cases, about 2.1 core-hours, about
+# 1.05 h on 2 cores (the H = 37 d point alone is about 48 min). The full grid:
+# 28 cases, about 2.9 core-hours. `python -m dem_study estimate --configfile
+# config/config.yaml [--subset full]` prints the estimate per point.
+sys.path.insert(0, str(Path(workflow.basedir)))
+from dem_study import grid as dem_grid  # noqa: E402
+
+ACCURACY = config.get("accuracy", {})
+DEM_STUDY = bool(ACCURACY.get("dem_study", False))
+ACC_DEM = f"{RESULTS}/accuracy/dem"
+DEM_POINTS = dem_grid.expand(ACCURACY) if DEM_STUDY else None
+DEM_POINT_NAMES = list(dem_grid.unique_points(DEM_POINTS)["point"]) if DEM_STUDY else []
+YADE_STAGE = (
+    "OMP_NUM_THREADS=1 {YADE} -n -x yade_scripts/run_stage.py"
+    " {input.scene} {params.stage} {params.case_dir} > {log} 2>&1"
+)
+
+
+wildcard_constraints:
+    point="base_s[0-9]+|[A-Za-z]+-[0-9.e-]+_s[0-9]+",
+
+
+rule dem_study_points:
+    output:
+        f"{ACC_DEM}/points.csv",
+    params:
+        rows=DEM_POINTS.to_dict("records") if DEM_STUDY else [],
+    log:
+        f"{RESULTS}/logs/accuracy/dem_study_points.log",
+    localrule: True
+    run:
+        import pandas as pd
+
+        pd.DataFrame(params.rows).to_csv(output[0], index=False)
+        with open(log[0], "w") as f:
+            print(f"{len(params.rows)} rows, {len(DEM_POINT_NAMES)} DEM cases", file=f)
+
+
+rule dem_study_scene:
+    output:
+        f"{ACC_DEM}/{{point}}/scene.json",
+    params:
+        scene=lambda wc: dem_grid.point_scene(config, wc.point),
+    log:
+        f"{RESULTS}/logs/accuracy/dem/{{point}}/scene.log",
+    localrule: True
+    run:
+        import json
+
+        Path(output[0]).write_text(json.dumps(params.scene, indent=2) + "\n")
+        with open(log[0], "w") as f:
+            print(f"wrote {output[0]}", file=f)
+
+
+rule dem_study_pack:
+    input:
+        scene=rules.dem_study_scene.output[0],
+    output:
+        state=f"{ACC_DEM}/{{point}}/pack.final.yade.gz",
+        sidecar=f"{ACC_DEM}/{{point}}/pack.json",
+    params:
+        stage="pack",
+        case_dir=lambda wc: f"{ACC_DEM}/{wc.point}",
+    log:
+        f"{RESULTS}/logs/accuracy/dem/{{point}}/pack.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/accuracy/dem/{{point}}/pack.tsv"
+    threads: 1
+    shell:
+        YADE_STAGE
+
+
+rule dem_study_preshear:
+    input:
+        scene=rules.dem_study_scene.output[0],
+        state=rules.dem_study_pack.output.state,
+    output:
+        state=f"{ACC_DEM}/{{point}}/preshear.final.yade.gz",
+        series=f"{ACC_DEM}/{{point}}/preshear.csv",
+        sidecar=f"{ACC_DEM}/{{point}}/preshear.json",
+    params:
+        stage="preshear",
+        case_dir=lambda wc: f"{ACC_DEM}/{wc.point}",
+    log:
+        f"{RESULTS}/logs/accuracy/dem/{{point}}/preshear.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/accuracy/dem/{{point}}/preshear.tsv"
+    threads: 1
+    shell:
+        YADE_STAGE
+
+
+rule dem_study_heaviside:
+    input:
+        scene=rules.dem_study_scene.output[0],
+        state=rules.dem_study_preshear.output.state,
+    output:
+        state=f"{ACC_DEM}/{{point}}/heaviside.final.yade.gz",
+        series=f"{ACC_DEM}/{{point}}/heaviside.csv",
+        sidecar=f"{ACC_DEM}/{{point}}/heaviside.json",
+    params:
+        stage="heaviside",
+        case_dir=lambda wc: f"{ACC_DEM}/{wc.point}",
+    log:
+        f"{RESULTS}/logs/accuracy/dem/{{point}}/heaviside.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/accuracy/dem/{{point}}/heaviside.tsv"
+    threads: 1
+    shell:
+        YADE_STAGE
+
+
+def _report(name, caption):
+    return report(f"{RESULTS}/accuracy/{name}", caption=f"../report/{caption}.rst", category="Accuracy and cost")
+
+
+rule dem_study:
+    input:
+        points=rules.dem_study_points.output[0],
+        runs=[
+            f"{ACC_DEM}/{point}/{name}"
+            for point in DEM_POINT_NAMES
+            for name in ["pack.json", "preshear.json", "preshear.csv", "heaviside.json", "heaviside.csv"]
+        ],
+    output:
+        table=_report("dem_cost.csv", "dem_cost"),
+        figure=_report("dem_cost.png", "dem_cost"),
+        transients=_report("dem_transients.png", "dem_transients"),
+        mu_table=_report("mu_of_I.csv", "mu_of_I"),
+        mu_figure=_report("mu_of_I.png", "mu_of_I"),
+        summary=f"{RESULTS}/accuracy/dem_study.json",
+    params:
+        campaign_I=sorted({case["inertial_number"] for case in CASES.values()}),
+        tolerance=" ".join(f"{k}={v}" for k, v in ACCURACY.get("tolerance", {}).items()),
+        steady_window=ACCURACY.get("steady_window", 0.5),
+        heaviside_strain=ACCURACY.get("heaviside_strain", 0.4),
+        transient_bin=ACCURACY.get("transient_bin", 0.01),
+        quasi_static_tolerance=ACCURACY.get("quasi_static_tolerance", 0.05),
+    log:
+        f"{RESULTS}/logs/accuracy/dem_study.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/accuracy/dem_study.tsv"
+    threads: 1
+    shell:
+        "{PY} -m dem_study analyse --points {input.points} --dem-dir {ACC_DEM} --out {RESULTS}/accuracy"
+        " --steady-window {params.steady_window} --heaviside-strain {params.heaviside_strain}"
+        " --transient-bin {params.transient_bin} --campaign-I {params.campaign_I}"
+        " --quasi-static-tolerance {params.quasi_static_tolerance}"
+        " --tolerance {params.tolerance} > {log} 2>&1"
+
+
 def accuracy_targets():
     targets = []
-    if config.get("accuracy", {}).get("ode_work_precision", True):
+    if ACCURACY.get("ode_work_precision", True):
         targets += rules.ode_work_precision.output
+    if DEM_STUDY:
+        targets += rules.dem_study.output
     return targets

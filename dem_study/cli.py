@@ -1,0 +1,99 @@
+"""Command line: ``python -m dem_study analyse|estimate ...`` (see dem_study/README.md)."""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+import pandas as pd
+import yaml
+
+from . import analysis, figures, grid
+
+
+def _tolerance(items):
+    out = {}
+    for item in items or []:
+        key, _, value = item.partition("=")
+        if key not in analysis.DEFAULT_TOLERANCE or not value:
+            raise SystemExit(f"--tolerance {item!r}: expected KEY=VALUE with KEY in "
+                             f"{', '.join(analysis.DEFAULT_TOLERANCE)}")
+        out[key] = float(value)
+    return out
+
+
+def analyse(args) -> int:
+    points = pd.read_csv(args.points)
+    tol = _tolerance(args.tolerance)
+    edges = analysis.strain_edges(args.heaviside_strain, args.transient_bin)
+    results = {p: analysis.load_point(Path(args.dem_dir) / p, p, args.steady_window, edges)
+               for p in points["point"].unique()}
+    table = analysis.cost_table(points, results, tol)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    table.to_csv(out / "dem_cost.csv", index=False, float_format="%.6g")
+    figures.error_against_cost(table, out / "dem_cost.png", tol)
+    figures.transients(table, {p: r.curves for p, r in results.items()}, out / "dem_transients.png")
+    mu_table, fit = analysis.mu_of_I_table(points, results, args.campaign_I, args.quasi_static_tolerance)
+    mu_table.to_csv(out / "mu_of_I.csv", index=False, float_format="%.6g")
+    figures.mu_of_I(mu_table, out / "mu_of_I.png")
+    camp = mu_table[mu_table["kind"] == "campaign"]
+    summary = {
+        "tolerance": {**analysis.DEFAULT_TOLERANCE, **tol},
+        "tolerance_rule": "a setting is within tolerance when every deviation from the finest value "
+                          "of its axis is at most max(tolerance, seed spread)",
+        "seed_spread": {k.removeprefix("seed_spread_"): float(v) for k, v in table.iloc[0].items()
+                        if k.startswith("seed_spread_")},
+        "cheapest_within_tolerance": analysis.cheapest_within_tolerance(table),
+        "mu_of_I_fit": vars(fit),
+        "quasi_static_tolerance": args.quasi_static_tolerance,
+        "campaign_quasi_static": {f"{I:g}": {"rel_excess": float(e), "within": bool(w)}
+                                  for I, e, w in zip(camp["inertial_number"], camp["rel_excess"],
+                                                     camp["within_quasi_static"])},
+    }
+    (out / "dem_study.json").write_text(json.dumps(summary, indent=2) + "\n")
+    print(table[["axis", "value", "wall_time_per_strain_s", "particle_steps_per_s", "d_mu", "d_A_norm",
+                 "d_theta_A_deg", "d_transient_mu", "within_tolerance"]].to_string())
+    print(json.dumps(summary, indent=2))
+    return 0
+
+
+def estimate(args) -> int:
+    config = yaml.safe_load(Path(args.configfile).read_text())
+    if args.subset:
+        config["accuracy"]["subset"] = args.subset
+    est = grid.estimate(config)
+    print(est[["point", "N", "steps", "est_core_s"]].to_string(float_format=lambda x: f"{x:.4g}"))
+    total = est["est_core_s"].sum()
+    print(f"{len(est)} DEM cases: {total / 3600:.2f} core-hours; "
+          f"about {grid.makespan(est['est_core_s'], args.cores) / 3600:.2f} h on {args.cores} cores")
+    return 0
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(prog="python -m dem_study", description=__doc__)
+    sub = p.add_subparsers(dest="command", required=True)
+    a = sub.add_parser("analyse", help="cost table, error-against-cost and mu(I) from the study's DEM runs")
+    a.add_argument("--points", required=True, help="the study's points table (grid.expand), CSV")
+    a.add_argument("--dem-dir", required=True, help="folder holding one case folder per point")
+    a.add_argument("--out", required=True, help="output folder")
+    a.add_argument("--steady-window", type=float, default=0.5, help="pre-shear strain averaged for steady values")
+    a.add_argument("--heaviside-strain", type=float, required=True, help="strain after the reversal")
+    a.add_argument("--transient-bin", type=float, default=0.01, help="strain bin of the transient curves")
+    a.add_argument("--tolerance", nargs="*", metavar="KEY=VALUE", help="override a tolerance")
+    a.add_argument("--campaign-I", type=float, nargs="+", required=True, help="the campaign's inertial numbers")
+    a.add_argument("--quasi-static-tolerance", type=float, default=0.05,
+                   help="largest (mu - mu_c)/mu_c accepted as quasi-static")
+    a.set_defaults(func=analyse)
+    e = sub.add_parser("estimate", help="estimated run time of the study's DEM cases")
+    e.add_argument("--configfile", required=True)
+    e.add_argument("--subset", choices=["default", "full"])
+    e.add_argument("--cores", type=int, default=2)
+    e.set_defaults(func=estimate)
+    args = p.parse_args(argv)
+    try:
+        return args.func(args)
+    except (analysis.StudyInputError, ValueError) as err:
+        print(f"dem_study: {err}", file=sys.stderr)
+        return 2
