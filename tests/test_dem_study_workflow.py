@@ -1,9 +1,11 @@
 """The DEM resolution study in the workflow: planned with accuracy.dem_study on, absent with it off,
 and the schema stops a bad study value before any job."""
+import shutil
 import subprocess
 import sys
 from pathlib import Path
 
+import pandas as pd
 import pytest
 import yaml
 
@@ -55,3 +57,36 @@ def test_bad_study_value_stops_before_any_job(tmp_path):
     message = result.stdout + result.stderr
     assert result.returncode != 0
     assert "dt_over_tc" in message and "maximum of 0.3" in message, message[-2000:]
+
+
+@pytest.mark.yade
+@pytest.mark.slow
+@pytest.mark.skipif(shutil.which("yade") is None, reason="needs YADE (Debian package yade)")
+def test_tiny_study_runs_end_to_end_through_snakemake(tmp_path):
+    """Three real ~200-disk points (two seeds at the base, one other I): about a minute on one core."""
+    config = yaml.safe_load((ROOT / "config" / "ci.yaml").read_text())
+    config["results_dir"] = str(tmp_path / "results")
+    config["accuracy"] = dict(
+        ode_work_precision=False, dem_study=True, subset="default",
+        base=dict(kappa=1e3, inertial_number=1e-2, H_over_d=8, dt_over_tc=0.1, fine_interval=0.002,
+                  coarse_interval=0.01),
+        dem_grid=dict(inertial_number=[1e-2, 3e-2], dt_over_tc=[0.1, 0.3]),
+        default_subset=dict(inertial_number=[3e-2]),
+        seeds=[1, 2], preshear_strain=0.6, heaviside_strain=0.2, steady_window=0.2,
+    )
+    path = tmp_path / "config.yaml"
+    path.write_text(yaml.safe_dump(config))
+    target = f"{config['results_dir']}/accuracy/dem_cost.csv"
+    result = subprocess.run([sys.executable, "-m", "snakemake", "-j1", target, "--configfile", str(path)],
+                            cwd=ROOT, capture_output=True, text=True, timeout=900)
+    assert result.returncode == 0, result.stderr[-3000:]
+    cost = pd.read_csv(target)
+    assert set(cost["axis"]) == {"inertial_number", "seed"}
+    assert (cost["particle_steps_per_s"] > 1e5).all() and (cost["wall_time_s"] > 0).all()
+    base = cost[(cost["axis"] == "inertial_number") & cost["finest"]].iloc[0]
+    assert base["d_mu"] == 0 and base["d_transient_mu"] == 0
+    assert 0.1 < base["mu_steady"] < 0.6 and 0 < base["A_norm_steady"] < 0.5
+    assert 90 < base["theta_A_deg_steady"] < 180          # compressive diagonal (MODEL.md)
+    assert cost["seed_spread_mu"].iloc[0] > 0
+    mu = pd.read_csv(f"{config['results_dir']}/accuracy/mu_of_I.csv")
+    assert (mu["kind"] == "campaign").sum() == 1 and 0.1 < mu["mu_c"].iloc[0] < 0.6
