@@ -219,6 +219,15 @@ def cheapest_within_tolerance(table: pd.DataFrame) -> dict:
     return out
 
 
+def recommended_setting(points: pd.DataFrame, cheapest: dict) -> dict:
+    """The base setting with each studied axis at its cheapest value within tolerance.
+
+    Assumes the axes act independently (the grid varies one at a time).
+    """
+    base = points[points["axis"] == "seed"].iloc[0]
+    return {a: float(cheapest[a]["value"]) if a in cheapest else float(base[a]) for a in AXES}
+
+
 @dataclass
 class MuOfIFit:
     mu_c: float

@@ -39,13 +39,15 @@ def analyse(args) -> int:
     mu_table.to_csv(out / "mu_of_I.csv", index=False, float_format="%.6g")
     figures.mu_of_I(mu_table, out / "mu_of_I.png")
     camp = mu_table[mu_table["kind"] == "campaign"]
+    cheapest = analysis.cheapest_within_tolerance(table)
     summary = {
         "tolerance": {**analysis.DEFAULT_TOLERANCE, **tol},
         "tolerance_rule": "a setting is within tolerance when every deviation from the finest value "
                           "of its axis is at most max(tolerance, seed spread)",
         "seed_spread": {k.removeprefix("seed_spread_"): float(v) for k, v in table.iloc[0].items()
                         if k.startswith("seed_spread_")},
-        "cheapest_within_tolerance": analysis.cheapest_within_tolerance(table),
+        "cheapest_within_tolerance": cheapest,
+        "recommended_setting": analysis.recommended_setting(points, cheapest),
         "mu_of_I_fit": vars(fit),
         "quasi_static_tolerance": args.quasi_static_tolerance,
         "campaign_quasi_static": {f"{I:g}": {"rel_excess": float(e), "within": bool(w)}

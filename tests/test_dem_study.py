@@ -267,6 +267,9 @@ def test_command_line_writes_every_output(study, tmp_path):
     summary = json.loads((out / "dem_study.json").read_text())
     assert summary["tolerance"]["mu"] == 0.05
     assert summary["campaign_quasi_static"]["0.001"]["within"] is True
+    rec = summary["recommended_setting"]
+    assert set(rec) == set(grid.AXES) and rec["kappa"] == summary["cheapest_within_tolerance"]["kappa"]["value"]
+    assert rec["H_over_d"] == ACC["base"]["H_over_d"]        # not studied here: the base
     mu = pd.read_csv(out / "mu_of_I.csv")
     assert mu["mu_c"].iloc[0] == pytest.approx(MU_C, abs=1e-5)   # written with 6 significant digits
     cost = pd.read_csv(out / "dem_cost.csv")
