@@ -58,6 +58,7 @@ class Stage:
         self.resume_path = os.path.join(self.partial, "resume.json")
         self.error = None
         self.done = False
+        self.want_checkpoint = False
         self.csv = None
 
     # ------------------------------------------------------------------ setup
@@ -175,7 +176,11 @@ class Stage:
         O.engines = engines.build(self.scene, every, "_ys_sample()",
                                   "_ys_wall()" if remaining_transition else None, remaining_transition)
         sampler = O.engines[-1]
-        sampler.iterLast = O.iter  # the next sample is `every` steps after the current state
+        # PeriodicEngine keeps the in-step iteration (one less than the state it sees);
+        # the grid of samples goes on from the last row (O.pause may act a step late)
+        last = st["last_sample_iter"] if st["last_sample_iter"] >= 0 else O.iter
+        sampler.iterLast = last - 1
+        sampler.nDone = 1  # else PeriodicEngine's first call resets iterLast to the current iteration
         self.sampler = sampler
         self.engine_names = engines.describe(O.engines)
 
@@ -190,7 +195,7 @@ class Stage:
 
     def sample(self):
         try:
-            self._sample()
+            self._sample(in_step=True)
         except BaseException as e:  # never let YADE swallow it: stop and re-raise in the main thread
             self.error = e
             O.pause()
@@ -205,7 +210,7 @@ class Stage:
         gd = (w["u_top"] - w["u_bot"]) / gap
         sxy = (w["fx_bot"] - w["fx_top"]) / (2 * W * d) / p
         pw = (w["fy_top"] - w["fy_bot"]) / (2 * W * d) / p
-        row = dict(t=(O.time - st["t_origin"]) / T0, strain=st["strain"], gammadot=gd * T0,
+        row = dict(t=(self._t - st["t_origin"]) / T0, strain=st["strain"], gammadot=gd * T0,
                    U_top=w["u_top"] / V0, U_bottom=w["u_bot"] / V0, gap=gap / d, sigma_xy=sxy, p=pw,
                    mu=abs(sxy) / pw if pw > 0 else math.nan,
                    inertial_number=abs(gd) * T0 / math.sqrt(pw) if pw > 0 else math.nan)
@@ -221,8 +226,12 @@ class Stage:
             row.update(b)
         return row, ys, pw, gd
 
-    def _sample(self):
-        if O.iter == self.st["last_sample_iter"]:
+    def _sample(self, in_step=False):
+        """One row. Inside a step (PyRunner) the positions are already those of the
+        end of the step while O.iter and O.time are not yet incremented: count it so."""
+        self._it = O.iter + (1 if in_step else 0)
+        self._t = O.time + (O.dt if in_step else 0.0)
+        if self._it == self.st["last_sample_iter"]:
             return
         der, st, sc = self.der, self.st, self.scene
         w = measure.walls(self.lay)
@@ -237,7 +246,7 @@ class Stage:
         self.csv.write(",".join(_fmt(row[c]) for c in measure.COLUMNS)
                        + "".join("," + _fmt(x) for x in extra) + "\n")
         st["rows"] += 1
-        st["last_sample_iter"] = O.iter
+        st["last_sample_iter"] = self._it
         if self.stage == "pack":
             self._pack_control(ke_mean, wall_speed, pw)
         else:
@@ -245,13 +254,15 @@ class Stage:
             st["sum_gap"] = st.get("sum_gap", 0.0) + row["gap"]
             st["sum_gd"] += abs(gd) * der["T0"]
             st["n_acc"] += 1
-            if O.iter >= st["fine_end"] and self.sampler.iterPeriod != st["coarse_every"]:
+            if self._it >= st["fine_end"] and self.sampler.iterPeriod != st["coarse_every"]:
                 self.sampler.iterPeriod = st["coarse_every"]
         now = time.time()
         if now - self.last_progress >= sc["run"]["progress_every_s"]:
             self.progress(now)
         if now - self.last_checkpoint >= sc["run"]["checkpoint_every_s"] and not self.done:
-            self.checkpoint()
+            # saved between steps (a state saved inside a step would be labelled one step early)
+            self.want_checkpoint = True
+            O.pause()
 
     def _ke_mean(self):
         """Mean squared grain velocity (translation only: a free rattler may spin for ever), in p/rho."""
@@ -269,11 +280,11 @@ class Stage:
             # low compaction load makes the last rattlers slow to calm down)
             if wall_speed < pk["wall_speed_max"] and ke < 100 * pk["ke_max"]:
                 st["phase"] = "ramp"
-                st["ramp_start"] = O.time
-                print(f"[pack] jammed at the compaction load, t = {O.time / der['T0']:.1f}: ramping to p", flush=True)
+                st["ramp_start"] = self._t
+                print(f"[pack] jammed at the compaction load, t = {self._t / der['T0']:.1f}: ramping to p", flush=True)
         if st["phase"] == "ramp":
             f0 = pk["compaction_pressure"] * full
-            x = min(1.0, (O.time - st["ramp_start"]) / (pk["ramp_time"] * der["T0"]))
+            x = min(1.0, (self._t - st["ramp_start"]) / (pk["ramp_time"] * der["T0"]))
             st["load"] = f0 + (full - f0) * x
             build.set_wall_load(self.lay, st["load"])
             if x >= 1.0:
@@ -283,7 +294,7 @@ class Stage:
             ok = settled and abs(pw - 1) < pk["pressure_tolerance"]
             st["pack_ok"] = st["pack_ok"] + 1 if ok else 0
             if st["pack_ok"] >= 2:
-                st["converged_at_t"] = O.time / der["T0"]
+                st["converged_at_t"] = self._t / der["T0"]
                 self.done = True
                 O.pause()
 
@@ -294,19 +305,19 @@ class Stage:
         if ys is None:
             ys = np.asarray(measure.yu.coordsAndDisplacements(1)[0][: self.lay["N"]])
         if not all(math.isfinite(v) for v in vals) or not np.all(np.isfinite(ys)):
-            raise GuardError(f"NaN in positions or forces at iteration {O.iter} (t = {row['t']:.4f})")
+            raise GuardError(f"NaN in positions or forces at iteration {self._it} (t = {row['t']:.4f})")
         out = np.nonzero((ys < w["y_bot"]) | (ys > w["y_top"]))[0]
         if len(out):
-            raise GuardError(f"disk {int(out[0])} left the cell at iteration {O.iter} "
+            raise GuardError(f"disk {int(out[0])} left the cell at iteration {self._it} "
                              f"(y = {ys[out[0]] / d:.3f} d, walls at {w['y_bot'] / d:.3f} d and {w['y_top'] / d:.3f} d)")
         smax = self.scene["material"]["size_ratio_max"]
         if measure.max_overlap_d(d, smax) > g["max_overlap_d"]:
             ov = measure.exact_max_overlap_d(d)
             if ov > g["max_overlap_d"]:
                 raise GuardError(f"overlap {ov:.4f} d above guards.max_overlap_d = {g['max_overlap_d']:g} "
-                                 f"at iteration {O.iter} (t = {row['t']:.4f})")
+                                 f"at iteration {self._it} (t = {row['t']:.4f})")
         if self.stage != "pack":
-            elapsed = (O.iter - st["iter0"]) * der["dt"] * der["gammadot"]
+            elapsed = (self._it - st["iter0"]) * der["dt"] * der["gammadot"]
             win = st["window"]
             win.append([elapsed, row["p"]])
             span = g["pressure_window_strain"]
@@ -320,15 +331,15 @@ class Stage:
 
     def progress(self, now):
         st = self.st
-        done = O.iter - st["iter0"]
+        done = self._it - st["iter0"]
         pct = 100.0 * done / st["n_steps"]
         elapsed = now - self.t_wall0
-        steps = O.iter - self.iter_wall0
+        steps = self._it - self.iter_wall0
         rate = steps / elapsed if elapsed > 0 else 0.0
         pps = rate * self.lay["N"]
         eta = (st["n_steps"] - done) / rate if rate > 0 else float("nan")
         what = f"phase {st['phase']}" if self.stage == "pack" else f"strain {st['strain']:.4f}"
-        print(f"[{self.stage}] {what} | {pct:5.1f}% | t {(O.time - st['t_origin']) / self.der['T0']:.2f} | "
+        print(f"[{self.stage}] {what} | {pct:5.1f}% | t {(self._t - st['t_origin']) / self.der['T0']:.2f} | "
               f"{pps:.3g} particle-steps/s | ETA {eta:.0f} s" + (" (at most)" if self.stage == "pack" else ""),
               flush=True)
         self.last_progress = now
@@ -355,11 +366,18 @@ class Stage:
         st = self.st
         # no row at the start itself: contact forces are not saved with a state, so the
         # first row comes one sampling interval in (the sidecar has the start's t and strain)
-        remaining = st["n_steps"] - (O.iter - st["iter0"])
-        if remaining > 0 and not self.done:
+        while True:
+            remaining = st["n_steps"] - (O.iter - st["iter0"])
+            if remaining <= 0 or self.done:
+                break
             O.run(remaining, True)
-        if self.error is not None:
-            raise self.error
+            if self.error is not None:
+                raise self.error
+            if self.want_checkpoint:
+                self.want_checkpoint = False
+                self.checkpoint()
+            elif O.iter - st["iter0"] < st["n_steps"] and not self.done:
+                raise RuntimeError(f"the run stopped early at iteration {O.iter}")
         if self.stage == "pack" and not self.done:
             raise GuardError(f"packing not converged within pack.max_time = {self.scene['pack']['max_time']:g} "
                              f"(phase {st['phase']}; see pack.csv columns ke, wall_speed, p)")
