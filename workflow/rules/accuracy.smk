@@ -58,32 +58,24 @@ rule dem_study_points:
     output:
         f"{ACC_DEM}/points.csv",
     params:
-        rows=DEM_POINTS.to_dict("records") if DEM_STUDY else [],
+        rows=DEM_POINTS.to_dict("records") if DEM_STUDY else [],  # reruns when the grid changes
     log:
         f"{RESULTS}/logs/accuracy/dem_study_points.log",
     localrule: True
-    run:
-        import pandas as pd
-
-        pd.DataFrame(params.rows).to_csv(output[0], index=False)
-        with open(log[0], "w") as f:
-            print(f"{len(params.rows)} rows, {len(DEM_POINT_NAMES)} DEM cases", file=f)
+    script:
+        "../../dem_study/smk_inputs.py"
 
 
 rule dem_study_scene:
     output:
         f"{ACC_DEM}/{{point}}/scene.json",
     params:
-        scene=lambda wc: dem_grid.point_scene(config, wc.point),
+        scene=lambda wc: dem_grid.point_scene(config, wc.point),  # reruns when the scene changes
     log:
         f"{RESULTS}/logs/accuracy/dem/{{point}}/scene.log",
     localrule: True
-    run:
-        import json
-
-        Path(output[0]).write_text(json.dumps(params.scene, indent=2) + "\n")
-        with open(log[0], "w") as f:
-            print(f"wrote {output[0]}", file=f)
+    script:
+        "../../dem_study/smk_inputs.py"
 
 
 rule dem_study_pack:
@@ -144,10 +136,6 @@ rule dem_study_heaviside:
         YADE_STAGE
 
 
-def _report(name, caption):
-    return report(f"{RESULTS}/accuracy/{name}", caption=f"../report/{caption}.rst", category="Accuracy and cost")
-
-
 rule dem_study:
     input:
         points=rules.dem_study_points.output[0],
@@ -157,11 +145,31 @@ rule dem_study:
             for name in ["pack.json", "preshear.json", "preshear.csv", "heaviside.json", "heaviside.csv"]
         ],
     output:
-        table=_report("dem_cost.csv", "dem_cost"),
-        figure=_report("dem_cost.png", "dem_cost"),
-        transients=_report("dem_transients.png", "dem_transients"),
-        mu_table=_report("mu_of_I.csv", "mu_of_I"),
-        mu_figure=_report("mu_of_I.png", "mu_of_I"),
+        table=report(
+            f"{RESULTS}/accuracy/dem_cost.csv",
+            caption="../report/dem_cost.rst",
+            category="Accuracy and cost",
+        ),
+        figure=report(
+            f"{RESULTS}/accuracy/dem_cost.png",
+            caption="../report/dem_cost.rst",
+            category="Accuracy and cost",
+        ),
+        transients=report(
+            f"{RESULTS}/accuracy/dem_transients.png",
+            caption="../report/dem_transients.rst",
+            category="Accuracy and cost",
+        ),
+        mu_table=report(
+            f"{RESULTS}/accuracy/mu_of_I.csv",
+            caption="../report/mu_of_I.rst",
+            category="Accuracy and cost",
+        ),
+        mu_figure=report(
+            f"{RESULTS}/accuracy/mu_of_I.png",
+            caption="../report/mu_of_I.rst",
+            category="Accuracy and cost",
+        ),
         summary=f"{RESULTS}/accuracy/dem_study.json",
     params:
         campaign_I=sorted({case["inertial_number"] for case in CASES.values()}),
