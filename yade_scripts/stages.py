@@ -92,6 +92,7 @@ class Stage:
         self.bulk = measure.Bulk(self.lay, self.der["d"])
         self.csv = open(self.csv_path, "a")
         self.t_wall0 = time.time()
+        self.cpu0 = time.process_time()
         self.iter_wall0 = O.iter
         self.last_progress = self.t_wall0
         self.last_checkpoint = self.t_wall0
@@ -194,11 +195,13 @@ class Stage:
         build.set_wall_speeds(self.lay, u, -u)
 
     def sample(self):
+        c0 = time.thread_time()  # CPU time of the simulation thread spent sampling
         try:
             self._sample(in_step=True)
         except BaseException as e:  # never let YADE swallow it: stop and re-raise in the main thread
             self.error = e
             O.pause()
+        self.st["sampler_cpu"] = self.st.get("sampler_cpu", 0.0) + time.thread_time() - c0
 
     def _row(self, w):
         der, st = self.der, self.st
@@ -351,6 +354,8 @@ class Stage:
         os.fsync(self.csv.fileno())
         now = time.time()
         st["wall_time"] += now - self.t_wall0
+        st["cpu_time"] = st.get("cpu_time", 0.0) + time.process_time() - self.cpu0
+        self.cpu0 = time.process_time()
         self.t_wall0, self.iter_wall0 = now, O.iter
         name = "ckpt_a.yade.gz" if st.get("ckpt") != "ckpt_a.yade.gz" else "ckpt_b.yade.gz"
         st["ckpt"] = name
@@ -392,6 +397,7 @@ class Stage:
         os.fsync(self.csv.fileno())
         self.csv.close()
         st["wall_time"] += time.time() - self.t_wall0
+        st["cpu_time"] = st.get("cpu_time", 0.0) + time.process_time() - self.cpu0
         O.tags["ys_state"] = json.dumps(st)
         final_tmp = os.path.join(self.partial, "final.yade.gz")
         O.save(final_tmp)
@@ -422,6 +428,8 @@ class Stage:
             steps=steps, samples=st["rows"], engines=self.engine_names,
             yade_version=yade.config.version, wall_time_s=st["wall_time"],
             particle_steps_per_s=self.lay["N"] * steps / st["wall_time"] if st["wall_time"] > 0 else math.nan,
+            cpu_time_s=st["cpu_time"], sampler_cpu_s=st.get("sampler_cpu", 0.0),
+            sampling_cost=st.get("sampler_cpu", 0.0) / max(1e-12, st["cpu_time"] - st.get("sampler_cpu", 0.0)),
             resumed=st["resumed"], t_end=(O.time - st["t_origin"]) / T0, strain_end=st["strain"],
             gap_end=(w["y_top"] - w["y_bot"]) / d,
             sampling_steps=dict(fine=st["fine_every"], coarse=st["coarse_every"], every=st["every"]),
