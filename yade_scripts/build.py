@@ -25,11 +25,11 @@ class PlacementError(RuntimeError):
 
 
 def contact_material(scene, radius):
-    """ViscElMat for a disk of this radius: young = kn/(2R)*2... so that 2*E*R = 2 kn.
+    """ViscElMat for a disk of this radius, with young = kn/R.
 
-    Two such disks combine in series to kn whatever their radii (YADE's Ip2 uses
-    k_i = 2 E_i R_i); poisson = kt/kn gives ks = kt; en = et = restitution is
-    turned into a dashpot from the masses of each pair.
+    YADE's Ip2 gives each side k_i = 2 E_i R_i = 2 kn, and the two combine in
+    series to kn whatever the radii; poisson = kt/kn gives ks = kt; en = et =
+    restitution becomes a dashpot from the masses of each pair.
     """
     m, d = scene["material"], scene["material"]["diameter"]
     kn = m["kappa"] * m["pressure"] * d
