@@ -139,6 +139,11 @@ def load_point(case_dir: Path, point: str, steady_window: float, edges: np.ndarr
         "wall_time_per_strain_s": float(shear_wall / strain),
         "particle_steps_per_s": float(shear_psteps / shear_wall),
         "kappa_achieved": float(sidecars["preshear"]["kappa_achieved"]),
+        # CPU time (immune to other jobs on the machine) and the share of it spent sampling,
+        # where the sidecars record them (yade_scripts since the sampler-CPU change); NaN otherwise
+        "cpu_time_s": float(sum(s.get("cpu_time_s", np.nan) for s in sidecars.values())),
+        "sampling_cost": float(sum(s.get("sampler_cpu_s", np.nan) for s in shear)
+                               / sum(s.get("cpu_time_s", np.nan) - s.get("sampler_cpu_s", np.nan) for s in shear)),
     }
     rev_strain = sidecars["heaviside"].get("reversal_strain", sidecars["heaviside"]["strain_start"])
     return PointResult(point, steady_state(pre, steady_window),

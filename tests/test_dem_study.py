@@ -152,6 +152,7 @@ def write_case(d: Path, I, dmu=0.0, dA=0.0, dtheta=0.0, tmu=0.0, tA=0.0, ttheta=
                           strain_end=preshear_strain - heaviside_strain, reversal_strain=preshear_strain),
     }
     for stage, side in sides.items():
+        side.update(cpu_time_s=side["wall_time_s"] * 0.9, sampler_cpu_s=side["wall_time_s"] * 0.09)
         (d / f"{stage}.json").write_text(json.dumps({**common, **side}))
 
 
@@ -217,6 +218,8 @@ def test_analysis_returns_the_known_deviations_and_seed_spread(study):
     assert k4["wall_time_s"] == pytest.approx(10 * 1.7)
     assert k4["particle_steps_per_s"] == pytest.approx(1e6)
     assert k4["wall_time_per_strain_s"] == pytest.approx(12 / 1.2)
+    assert k4["cpu_time_s"] == pytest.approx(0.9 * 17)
+    assert k4["sampling_cost"] == pytest.approx(0.09 / 0.81)       # sampler CPU over the rest
     # tolerance (defaults: mu 0.02, transient_mu 0.03, theta 2, transient |A| 0.015)
     assert bool(k4["within_tolerance"]) is True
     assert bool(k3["within_tolerance"]) is False
