@@ -62,7 +62,15 @@ def test_run_that_never_reached_steady_state(tmp_path):
     case = synthetic.write_case(tmp_path / "p1_I0.001_s1", default_params(), seed=1, preshear_strain=0.6,
                                 fabric_noise=0.002, mu_noise=0.005)
     with pytest.raises(io.DEMInputError, match=r"preshear\.csv: the pre-shear never reached steady state"):
-        io.read_case(case)
+        io.read_cases([case])
+
+
+def test_seeds_whose_mean_still_drifts_are_an_error_naming_their_files(tmp_path):
+    # three seeds all stopped while the fabric still grows: the ensemble mean drifts too
+    cases = [synthetic.write_case(tmp_path / f"p1_I0.001_s{k}", default_params(), seed=k, preshear_strain=0.6,
+                                  fabric_noise=0.002, mu_noise=0.005) for k in (1, 2, 3)]
+    with pytest.raises(io.DEMInputError, match=r"the mean of 3 seeds of p1_I0\.001 .*never reached steady state"):
+        io.read_cases(cases)
 
 
 def test_missing_file_and_missing_reversal(good_case, tmp_path):
