@@ -81,7 +81,7 @@ def adaptive_segment(rate, t0, t1, y0, method, rtol, atol, t_out, X_c=math.inf, 
     while solver.status == "running":
         t_prev, y_prev = solver.t, solver.y.copy()
         try:
-            solver.step()
+            message = solver.step()
             if solver.status != "failed":
                 rate(solver.t, solver.y[0], solver.y[1])  # accepted state must lie below X_c
         except PoleCrossing:
@@ -92,7 +92,7 @@ def adaptive_segment(rate, t0, t1, y0, method, rtol, atol, t_out, X_c=math.inf, 
             solver = start(t_prev, y_prev, h)
             continue
         if solver.status == "failed":
-            raise RuntimeError(f"{method} failed at t = {solver.t:.6g}: {solver.message}")
+            raise RuntimeError(f"{method} failed at t = {solver.t:.6g}: {message}")
         if j < len(t_out) and t_out[j] <= solver.t:
             dense = None
             while j < len(t_out) and t_out[j] <= solver.t:
