@@ -23,7 +23,7 @@ EXPLICIT = ("RK23", "RK45", "DOP853")
 IMPLICIT = ("Radau", "BDF", "LSODA")
 
 
-def adaptive_segment(rate, t0, t1, y0, method, rtol, atol, t_out, X_c=math.inf, xfun=None):
+def adaptive_segment(rate, t0, t1, y0, method, rtol, atol, t_out, X_c=math.inf, xfun=None, max_steps=None):
     """Integrate ``rate`` over ``[t0, t1]`` with ``scipy.integrate.<method>``.
 
     Parameters
@@ -36,6 +36,8 @@ def adaptive_segment(rate, t0, t1, y0, method, rtol, atol, t_out, X_c=math.inf, 
     rtol, atol : float
     t_out : array
         Sorted report times in ``[t0, t1]``, read from the solver's dense output.
+    max_steps : int, optional
+        Raise ``RuntimeError`` after this many attempted steps (none by default).
     X_c : float
     xfun : callable, optional
         ``xfun(t, a, b) -> X`` for the messages.
@@ -78,7 +80,13 @@ def adaptive_segment(rate, t0, t1, y0, method, rtol, atol, t_out, X_c=math.inf, 
         Y[j] = y0
         j += 1
     solver = start(t0, np.asarray(y0, dtype=float), None)
+    steps = 0
     while solver.status == "running":
+        steps += 1
+        if max_steps is not None and steps > max_steps:
+            raise RuntimeError(f"{method} needed more than {max_steps} steps by t = {solver.t:.6g} "
+                               f"(of {t1:.6g}): the problem is stiff here; an implicit method (Radau, BDF, "
+                               "LSODA) handles it")
         t_prev, y_prev = solver.t, solver.y.copy()
         try:
             message = solver.step()

@@ -193,7 +193,8 @@ def _report_times(history: History, t_eval, strain_eval, points_per_strain):
 
 def simulate(params, history: History, model="model1", A0=None, method=DEFAULT_METHOD,
              rtol=DEFAULT_RTOL, atol=DEFAULT_ATOL, step=None, friction="eq2",
-             strain_eval=None, t_eval=None, points_per_strain=POINTS_PER_STRAIN) -> pd.DataFrame:
+             strain_eval=None, t_eval=None, points_per_strain=POINTS_PER_STRAIN,
+             max_steps=None) -> pd.DataFrame:
     r"""Integrate Eq. 4 along ``history`` and tabulate fabric, X and friction.
 
     Parameters
@@ -222,6 +223,11 @@ def simulate(params, history: History, model="model1", A0=None, method=DEFAULT_M
         twice gives its left, then its right limit.
     points_per_strain : int
         Density of the default report grid (uniform in time per segment).
+    max_steps : int, optional
+        Budget of solver steps per history segment (scipy methods); past it a
+        ``RuntimeError`` says so. Default: none. A fitting loop sets one, so
+        that a trial parameter set that makes Eq. 4 stiff (an explicit method
+        crawling along the pole) costs a bounded time and scores as failed.
 
     Returns
     -------
@@ -283,7 +289,8 @@ def simulate(params, history: History, model="model1", A0=None, method=DEFAULT_M
             Y, y1 = rk4_segment(rate, s.t0, s.t1, y, step, t_out, X_c)
         else:
             xfun = _xfun(s)
-            Y, y1, _ = adaptive_segment(rate, s.t0, s.t1, y, method, rtol, atol, t_out, X_c, xfun)
+            Y, y1, _ = adaptive_segment(rate, s.t0, s.t1, y, method, rtol, atol, t_out, X_c, xfun,
+                                           max_steps=max_steps)
         y = np.asarray(y1, dtype=float)
         rows_t.append(t_out)
         rows_Y.append(Y)

@@ -128,3 +128,12 @@ def test_rk4_step_too_large_for_the_pole_errors_clearly_or_stays_bounded(step):
     else:
         assert_clean(tab, p.model1.X_c)
         assert tab.A_norm.max() < 1.0
+
+
+def test_step_budget_stops_a_crawling_solver_with_a_clear_error():
+    from model import default_params, heaviside, simulate
+
+    with pytest.raises(RuntimeError, match=r"RK45 needed more than 5 steps .*stiff"):
+        simulate(default_params(), heaviside(1.0, 1.0), method="RK45", rtol=1e-10, max_steps=5)
+    table = simulate(default_params(), heaviside(1.0, 1.0), method="RK45", rtol=1e-6, max_steps=20000)
+    assert np.isfinite(table.to_numpy(dtype=float)).all()
