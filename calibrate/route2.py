@@ -42,9 +42,10 @@ PENALTY = 1e3
 
 @dataclass(frozen=True)
 class Route2Settings:
-    method: str = "RK45"
+    method: str = "LSODA"   # switches to an implicit method where a trial set makes Eq. 4 stiff
     rtol: float = 1e-6
     atol: float = 1e-9
+    max_steps: int = 20000  # per history segment: a trial set past it scores as failed
     diff_step: float = 1e-3
     max_evals: int = 150
     mu_weight: float = 1.0
@@ -134,7 +135,7 @@ def replay_run(params, replay: Replay, model: str, friction: str, settings: Rout
         t = np.clip(replay.s, 0.0, h.t_end)
         order = np.argsort(t, kind="stable")
         sim = simulate(params, h, model=model, A0=(a0, b0), method=settings.method, rtol=settings.rtol,
-                       atol=settings.atol, friction=friction, t_eval=t[order])
+                       atol=settings.atol, friction=friction, t_eval=t[order], max_steps=settings.max_steps)
         m = np.empty((len(t), 3))
         m[order, 0] = sim["A_xx"].to_numpy()
         m[order, 1] = sim["A_xy"].to_numpy()
