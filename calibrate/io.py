@@ -8,31 +8,27 @@ only by the seed form one *ensemble*.
 Everything is checked here, at the entrance, and every problem raises
 :class:`DEMInputError` naming the file and what is wrong: a missing file or
 column, a NaN or infinity in a column the calibration uses, too few samples,
-times that do not increase, a reversal file without a reversal, and a pre-shear
-that never reached steady state. Nothing downstream re-checks.
+times that do not increase (these are the contract's checks, in
+``dem_contract.read_series``), a non-positive pressure, a reversal file
+without a reversal, and a pre-shear that never reached steady state (these are
+the calibration's own). Nothing downstream re-checks.
 
-Only contract columns are read; columns beyond the contract are ignored.
+Every contract column must be present; columns beyond the contract are ignored.
 """
 from __future__ import annotations
 
-import json
 import re
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
-
-import sys
 
 import numpy as np
 import pandas as pd
 
-#: The columns every run must carry (DESIGN.md), in order.
-CONTRACT_COLUMNS = (
-    "t", "strain", "gammadot", "U_top", "U_bottom", "gap", "A_xx", "A_xy", "n_contacts",
-    "sigma_xy", "p", "mu", "sigma_xy_bulk", "p_bulk", "phi", "Z", "inertial_number",
-)
+from dem_contract import CONTRACT_COLUMNS, REVERSAL_PROTOCOLS, DEMInputError, read_series, read_sidecar
+
 #: The columns the calibration computes with: they must be finite in every row.
 USED_COLUMNS = ("t", "strain", "gammadot", "A_xx", "A_xy", "sigma_xy", "p", "mu")
-REVERSAL_PROTOCOLS = ("heaviside", "sinusoidal")
 
 MIN_SAMPLES = 50            # rows per file
 STEADY_WINDOW = 0.5         # last fraction of the pre-shear strain judged for steadiness
@@ -40,10 +36,6 @@ STEADY_REL_TOL = 0.1        # allowed drift across that window, relative to the 
 STEADY_SE_FACTOR = 4.0      # ... or this many standard errors of the drift, if larger
 
 CASE_RE = re.compile(r"^(?P<group>.+)_s(?P<seed>[0-9A-Za-z]+)$")
-
-
-class DEMInputError(ValueError):
-    """A DEM file cannot be calibrated on; the message names the file and the problem."""
 
 
 @dataclass
@@ -113,47 +105,18 @@ def read_run(path, protocol: str, min_samples: int = MIN_SAMPLES) -> Run:
     Raises
     ------
     DEMInputError
-        Missing file or column, non-numeric or non-finite values in a used
-        column, fewer than ``min_samples`` rows, time not increasing or
-        non-positive pressure. (``read_case`` adds: a reversal run whose rate
-        never opposes the pre-shear's.)
+        Missing file or column (every contract column is required),
+        non-numeric or non-finite values in a used column, fewer than
+        ``min_samples`` rows, time not increasing (``dem_contract.read_series``);
+        non-positive pressure; an invalid sidecar. (``read_case`` adds: a
+        reversal run whose rate never opposes the pre-shear's.)
     """
     path = Path(path)
-    if not path.is_file():
-        raise DEMInputError(f"{path}: file not found (expected the {protocol} run of the case)")
-    try:
-        raw = pd.read_csv(path)
-    except Exception as exc:  # pandas raises several types for unreadable files
-        raise DEMInputError(f"{path}: not a readable CSV ({exc})") from None
-    raw.columns = [str(c).strip() for c in raw.columns]
-    missing = [c for c in CONTRACT_COLUMNS if c not in raw.columns]
-    if missing:
-        raise DEMInputError(f"{path}: missing column(s) {missing}; the contract requires {list(CONTRACT_COLUMNS)}")
-    data = raw[list(CONTRACT_COLUMNS)].copy()
-    for c in USED_COLUMNS:
-        col = pd.to_numeric(data[c], errors="coerce")
-        bad = ~np.isfinite(col.to_numpy(dtype=float))
-        if bad.any():
-            rows = np.nonzero(bad)[0]
-            raise DEMInputError(
-                f"{path}: column '{c}' has {bad.sum()} NaN/infinite/non-numeric value(s), "
-                f"first at data row {rows[0] + 1}; refusing to fit on it"
-            )
-        data[c] = col.astype(float)
-    if len(data) < min_samples:
-        raise DEMInputError(f"{path}: only {len(data)} samples, at least {min_samples} are needed")
-    if np.any(np.diff(data["t"].to_numpy()) <= 0):
-        k = int(np.argmax(np.diff(data["t"].to_numpy()) <= 0))
-        raise DEMInputError(f"{path}: column 't' does not increase strictly (row {k + 2})")
+    data = read_series(path, columns=CONTRACT_COLUMNS, finite=USED_COLUMNS, min_samples=min_samples,
+                       what=f"the {protocol} run of the case")
     if np.any(data["p"].to_numpy() <= 0):
         raise DEMInputError(f"{path}: column 'p' has non-positive values")
-    meta = {}
-    side = path.with_suffix(".json")
-    if side.is_file():
-        try:
-            meta = json.loads(side.read_text())
-        except json.JSONDecodeError as exc:
-            raise DEMInputError(f"{side}: invalid JSON sidecar ({exc})") from None
+    meta = read_sidecar(path)
     case = path.parent.name
     group, seed = split_case_name(case)
     return Run(path=path, case=case, group=group, seed=seed, protocol=protocol, data=data, meta=meta)

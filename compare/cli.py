@@ -74,7 +74,7 @@ def _cmd_sensitivity(args):
 
 def _cmd_synthetic(args):
     from model import default_params, load_params
-    from .synthetic import FABRIC_NOISE, MU_NOISE, write_ensemble
+    from dem_contract.synthetic import FABRIC_NOISE, MU_NOISE, write_ensemble
     params = load_params(args.params) if args.params else default_params()
     noise = dict(fabric_noise=FABRIC_NOISE, mu_noise=MU_NOISE) if args.noise else {}
     paths = write_ensemble(args.out, params, seeds=args.seeds, group=args.group, model=args.model,

@@ -3,7 +3,10 @@ r"""Reading the DEM time series of one case: the reversal, the fabric before it.
 A case is a directory ``<label>/`` with ``preshear.csv`` and one CSV per
 reversal protocol (``heaviside.csv``, ``sinusoidal.csv``), in the column layout
 of DESIGN.md's contract, and optional JSON sidecars ``<stage>.json``. Only the
-columns in ``USED_COLUMNS`` are read; nothing beyond the contract is needed.
+columns in ``USED_COLUMNS`` are read (and must be present); nothing beyond the
+contract is needed. The contract's checks and the error type live in
+``dem_contract``; the reversal start, A0 and the steady values are this
+package's.
 
 Conventions
 -----------
@@ -23,7 +26,6 @@ Conventions
 """
 from __future__ import annotations
 
-import json
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -31,20 +33,13 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-CONTRACT_COLUMNS = (
-    "t", "strain", "gammadot", "U_top", "U_bottom", "gap", "A_xx", "A_xy", "n_contacts",
-    "sigma_xy", "p", "mu", "sigma_xy_bulk", "p_bulk", "phi", "Z", "inertial_number",
-)
+from dem_contract import REVERSAL_PROTOCOLS, DEMInputError, read_series, read_sidecar
+
 USED_COLUMNS = ("t", "strain", "gammadot", "A_xx", "A_xy", "mu")
-REVERSAL_PROTOCOLS = ("heaviside", "sinusoidal")
 LABEL_RE = re.compile(r"^(?P<group>p[^_]+_I[^_]+)_s(?P<seed>[^_/]+)$")
 MIN_A0_SAMPLES = 10
 A0_WINDOW = 0.1       # strain over which the pre-reversal fabric is averaged
 MIN_SAMPLES = 10
-
-
-class DEMInputError(ValueError):
-    """A DEM file is missing, malformed or breaks the time-series contract."""
 
 
 def split_label(label: str):
@@ -55,54 +50,6 @@ def split_label(label: str):
     """
     m = LABEL_RE.match(label)
     return (m.group("group"), m.group("seed")) if m else (label, label)
-
-
-def read_series(path, min_samples: int = MIN_SAMPLES) -> pd.DataFrame:
-    """Read one contract CSV and check the columns this package uses.
-
-    Raises
-    ------
-    DEMInputError
-        Missing file or column, a non-finite value in a used column, fewer
-        than ``min_samples`` rows, or ``t`` not strictly increasing; the
-        message names the file and the problem.
-    """
-    path = Path(path)
-    if not path.is_file():
-        raise DEMInputError(f"{path}: file not found")
-    try:
-        raw = pd.read_csv(path)
-    except Exception as exc:  # pandas raises several types for unreadable files
-        raise DEMInputError(f"{path}: not a readable CSV ({exc})") from None
-    raw.columns = [str(c).strip() for c in raw.columns]
-    missing = [c for c in USED_COLUMNS if c not in raw.columns]
-    if missing:
-        raise DEMInputError(f"{path}: missing column(s) {missing} of the DEM contract {list(CONTRACT_COLUMNS)}")
-    data = pd.DataFrame({c: pd.to_numeric(raw[c], errors="coerce") for c in USED_COLUMNS})
-    bad = ~np.isfinite(data.to_numpy(dtype=float))
-    if bad.any():
-        r, c = np.argwhere(bad)[0]
-        raise DEMInputError(f"{path}: column '{USED_COLUMNS[c]}' is NaN, infinite or not a number at data row {r + 1}")
-    if len(data) < min_samples:
-        raise DEMInputError(f"{path}: {len(data)} samples, at least {min_samples} needed")
-    dt = np.diff(data["t"].to_numpy())
-    if np.any(dt <= 0):
-        raise DEMInputError(f"{path}: column 't' does not increase strictly (data row {int(np.argmax(dt <= 0)) + 2})")
-    return data
-
-
-def read_sidecar(path) -> dict:
-    """The JSON sidecar of a CSV (``{}`` if there is none)."""
-    side = Path(path).with_suffix(".json")
-    if not side.is_file():
-        return {}
-    try:
-        meta = json.loads(side.read_text())
-    except json.JSONDecodeError as exc:
-        raise DEMInputError(f"{side}: invalid JSON ({exc})") from None
-    if not isinstance(meta, dict):
-        raise DEMInputError(f"{side}: expected a JSON object")
-    return meta
 
 
 @dataclass
@@ -162,7 +109,7 @@ def load_reversal(case_dir, protocol: str, a0_window: float = A0_WINDOW) -> Reve
     Raises
     ------
     DEMInputError
-        Bad files (see ``read_series``), a reversal that never shears against
+        Bad files (see ``dem_contract.read_series``), a reversal that never shears against
         the pre-shear, or a sidecar reversal time outside the run.
     """
     case_dir = Path(case_dir)
@@ -170,9 +117,9 @@ def load_reversal(case_dir, protocol: str, a0_window: float = A0_WINDOW) -> Reve
         raise DEMInputError(f"{case_dir}: protocol {protocol!r} is not one of {REVERSAL_PROTOCOLS}")
     if not (a0_window > 0):
         raise DEMInputError(f"a0_window = {a0_window!r} must be positive")
-    pre = read_series(case_dir / "preshear.csv")
+    pre = read_series(case_dir / "preshear.csv", USED_COLUMNS, MIN_SAMPLES, what="the pre-shear of the case")
     path = case_dir / f"{protocol}.csv"
-    rev = read_series(path)
+    rev = read_series(path, USED_COLUMNS, MIN_SAMPLES, what=f"the {protocol} run of the case")
     meta = read_sidecar(path)
     t_rev = s_rev0 = None
     if "reversal_t" in meta:   # yade_scripts/SCENE.md: reversal_t, reversal_strain (start of the reversal)

@@ -5,9 +5,9 @@ import pytest
 
 from compare import comparison, metrics
 from compare.cli import main
-from compare.dem import DEMInputError, load_reversal
+from compare.dem import load_reversal
 from compare.predict import clean_rate, predict
-from compare.synthetic import write_case, write_ensemble
+from dem_contract.synthetic import write_case, write_ensemble
 from model import default_params, save_params
 
 
@@ -138,8 +138,6 @@ def test_missing_column_is_reported_with_the_file(tmp_path, params_file, capsys)
                       protocols=("heaviside",))
     df = pd.read_csv(case / "heaviside.csv").drop(columns=["A_xy"])
     df.to_csv(case / "heaviside.csv", index=False)
-    with pytest.raises(DEMInputError, match=r"heaviside\.csv: missing column\(s\) \['A_xy'\]"):
-        load_reversal(case, "heaviside")
     assert main(["predict", "--dem", str(case), "--params", str(params_file), "--protocols", "heaviside",
                  "--out", str(tmp_path / "out")]) == 2
     assert "heaviside.csv" in capsys.readouterr().err

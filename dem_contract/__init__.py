@@ -1,0 +1,17 @@
+"""The DEM time-series contract between ``yade_scripts/`` and the analysis stages (DESIGN.md).
+
+One CSV per run and stage, a header naming ``CONTRACT_COLUMNS`` (more may
+follow), and an optional JSON sidecar ``<stage>.json``. This package holds what
+every reader of that layout shares: the column names, the one error type
+(``DEMInputError``, whose message names the file and the problem), and the
+checked readers ``read_series`` and ``read_sidecar``. It needs numpy and pandas
+only. The checks a stage adds on top (calibrate: positive pressure, a reversal
+in each reversal run, a steady pre-shear; compare: the reversal start from the
+sidecar) stay in that stage.
+
+``dem_contract.synthetic`` (it needs ``model``) writes model-made cases in the
+same layout, for tests and trial runs.
+"""
+from .series import CONTRACT_COLUMNS, REVERSAL_PROTOCOLS, DEMInputError, read_series, read_sidecar
+
+__all__ = ["CONTRACT_COLUMNS", "REVERSAL_PROTOCOLS", "DEMInputError", "read_series", "read_sidecar"]

@@ -1,0 +1,89 @@
+"""The DEM contract's reader (dem_contract): every bad file is a DEMInputError naming the file and the problem.
+
+The stages add their own checks on top (tests/test_calibrate_inputs.py,
+tests/test_compare.py); their command lines turn this error into exit status 2.
+"""
+import numpy as np
+import pandas as pd
+import pytest
+
+from dem_contract import CONTRACT_COLUMNS, DEMInputError, read_series, read_sidecar
+
+
+def write_run(path, n=60, **changes):
+    """A well-formed contract CSV of ``n`` rows (time and strain increasing), with columns replaced by ``changes``."""
+    df = pd.DataFrame({c: np.linspace(0.01, 1.0, n) for c in CONTRACT_COLUMNS})
+    df["t"] = np.arange(1.0, n + 1.0)
+    for c, v in changes.items():
+        df[c] = v
+    df.to_csv(path, index=False)
+    return path
+
+
+def test_a_good_run_reads_with_the_asked_columns_as_floats(tmp_path):
+    data = read_series(write_run(tmp_path / "preshear.csv"), min_samples=50)
+    assert list(data.columns) == list(CONTRACT_COLUMNS) and len(data) == 60
+    assert (data.dtypes == float).all()
+    assert list(read_series(tmp_path / "preshear.csv", columns=("t", "mu")).columns) == ["t", "mu"]
+
+
+def test_missing_file_is_named_with_what_was_expected(tmp_path):
+    with pytest.raises(DEMInputError, match=r"sinusoidal\.csv: file not found \(expected the sinusoidal run of the case\)"):
+        read_series(tmp_path / "sinusoidal.csv", what="the sinusoidal run of the case")
+    (tmp_path / "empty.csv").write_text("")
+    with pytest.raises(DEMInputError, match=r"empty\.csv: not a readable CSV"):
+        read_series(tmp_path / "empty.csv")
+
+
+def test_missing_column_is_named(tmp_path):
+    path = write_run(tmp_path / "heaviside.csv")
+    pd.read_csv(path).drop(columns=["A_xy"]).to_csv(path, index=False)
+    with pytest.raises(DEMInputError, match=r"heaviside\.csv: missing column\(s\) \['A_xy'\]"):
+        read_series(path)
+    # only the columns asked for must be present (compare reads six of them)
+    assert list(read_series(path, columns=("t", "A_xx")).columns) == ["t", "A_xx"]
+
+
+@pytest.mark.parametrize("bad", [np.nan, np.inf, "n/a"])
+def test_nan_is_named_with_its_column_and_row(tmp_path, bad):
+    path = write_run(tmp_path / "sinusoidal.csv")
+    df = pd.read_csv(path).astype({"mu": object})
+    df.loc[7, "mu"] = bad
+    df.to_csv(path, index=False)
+    with pytest.raises(DEMInputError, match=r"sinusoidal\.csv: column 'mu' has 1 NaN.*row 8"):
+        read_series(path)
+    # a column outside ``finite`` is carried as it is (calibrate checks only the columns it computes with)
+    assert len(read_series(path, finite=("t", "A_xx"))) == 60
+
+
+def test_too_few_samples(tmp_path):
+    path = write_run(tmp_path / "heaviside.csv", n=20)
+    with pytest.raises(DEMInputError, match=r"heaviside\.csv: only 20 samples, at least 50"):
+        read_series(path, min_samples=50)
+
+
+def test_time_must_increase_strictly(tmp_path):
+    t = np.arange(1.0, 61.0)
+    t[5] = t[4]
+    path = write_run(tmp_path / "preshear.csv", t=t)
+    with pytest.raises(DEMInputError, match=r"preshear\.csv: column 't' does not increase strictly \(data row 6\)"):
+        read_series(path)
+
+
+def test_sidecar_must_be_a_json_object(tmp_path):
+    path = write_run(tmp_path / "heaviside.csv")
+    assert read_sidecar(path) == {}
+    (tmp_path / "heaviside.json").write_text("{not json")
+    with pytest.raises(DEMInputError, match=r"heaviside\.json: invalid JSON sidecar"):
+        read_sidecar(path)
+    (tmp_path / "heaviside.json").write_text("[1, 2]")
+    with pytest.raises(DEMInputError, match=r"heaviside\.json: expected a JSON object"):
+        read_sidecar(path)
+
+
+def test_both_stages_raise_the_contract_error():
+    import calibrate
+    import calibrate.io
+    import compare
+    assert calibrate.DEMInputError is calibrate.io.DEMInputError is compare.DEMInputError is DEMInputError
+    assert issubclass(DEMInputError, ValueError)
