@@ -261,25 +261,23 @@ class History:
         ends = self.breakpoints[1:-1]
         return np.searchsorted(ends, t, side="left")
 
-    def gammadot(self, t) -> np.ndarray:
-        """Signed equivalent shear rate at times ``t`` (left limit at boundaries)."""
+    def _per_segment(self, t, value) -> np.ndarray:
+        """``value(i, segment, t_i)`` evaluated segment by segment at times ``t``."""
         t = np.atleast_1d(np.asarray(t, dtype=float))
         idx = self.segment_index(t)
         out = np.empty_like(t)
         for i in np.unique(idx):
             m = idx == i
-            out[m] = self.segments[i].gammadot(t[m])
+            out[m] = value(i, self.segments[i], t[m])
         return out
+
+    def gammadot(self, t) -> np.ndarray:
+        """Signed equivalent shear rate at times ``t`` (left limit at boundaries)."""
+        return self._per_segment(t, lambda i, seg, ti: seg.gammadot(ti))
 
     def strain(self, t) -> np.ndarray:
         """Signed accumulated strain at times ``t``."""
-        t = np.atleast_1d(np.asarray(t, dtype=float))
-        idx = self.segment_index(t)
-        out = np.empty_like(t)
-        for i in np.unique(idx):
-            m = idx == i
-            out[m] = self.strain0[i] + self.segments[i].strain(t[m])
-        return out
+        return self._per_segment(t, lambda i, seg, ti: self.strain0[i] + seg.strain(ti))
 
     def times_at_strains(self, strains) -> np.ndarray:
         """Times at which the history passes through ``strains``, in order.
