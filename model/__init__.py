@@ -39,13 +39,13 @@ from .laws import (
     steady_state_constant,
 )
 from .params import DEFAULT_PARAMS_YAML, ModelParams, default_params, load_params, params_from_dict, save_params
-from .rhs import PoleError
+from .rhs import FabricDivergence, PoleError
 
 __all__ = [
     "ModelParams", "load_params", "params_from_dict", "save_params", "default_params", "DEFAULT_PARAMS_YAML",
     "alpha_model1", "alpha_model2", "friction_eq2", "friction_quadratic",
     "steady_state_constant", "fabric_norm", "fabric_angle_deg",
-    "simulate", "steady_state", "PoleError", "COLUMNS", "METHODS",
+    "simulate", "steady_state", "PoleError", "FabricDivergence", "COLUMNS", "METHODS",
     "DEFAULT_METHOD", "DEFAULT_RTOL", "DEFAULT_ATOL",
     "History", "heaviside", "sinusoidal", "tabulated", "rest", "steady_shear", "pure_shear",
     "rigid_rotation", "velocity_gradient", "concatenate", "superpose_rotation",

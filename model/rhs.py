@@ -17,6 +17,10 @@ Where :math:`|D'| = 0` the alpha terms vanish whatever X is, so X is not
 needed there. Simple shear (:math:`d_1 = 0`, :math:`d_2 = w = \dot\gamma/2`)
 gives MODEL.md's component form.
 
+A fabric beyond :math:`|A| = 1/\sqrt 2` (the bound of any contact network)
+raises :class:`FabricDivergence`, so that parameters that make Eq. 4 blow up
+stop with a message instead of overflowing into NaN.
+
 Model 1 is undefined for :math:`X \ge X_c`: the right-hand side raises
 :class:`PoleCrossing` there instead of returning NaN; the integrators turn it
 into a smaller step or a :class:`PoleError`.
@@ -40,6 +44,20 @@ class PoleError(ValueError):
     def __init__(self, message, t=math.nan, X=math.nan, X_c=math.nan):
         super().__init__(message)
         self.t, self.X, self.X_c = t, X, X_c
+
+
+class FabricDivergence(ValueError):
+    """The fabric left the physical range |A| <= 1/sqrt(2) (or became non-finite).
+
+    A = -I/2 + <n (x) n> has eigenvalues in [-1/2, 1/2], so |A| <= 1/sqrt(2)
+    for any contact network; a model that leaves that range has parameters
+    that make Eq. 4 grow without bound (alpha2 |D'| > 0 for long).
+    """
+
+    def __init__(self, t, a, b):
+        super().__init__(f"the fabric diverged at t = {t:.6g}: |A| = {math.sqrt(2 * (a * a + b * b)):.4g} "
+                         "exceeds 1/sqrt(2), the bound of any fabric deviator (check alpha2 and its growth with X)")
+        self.t = t
 
 
 class PoleCrossing(ArithmeticError):
@@ -79,6 +97,8 @@ def make_rate(kin, alphas, X_c):
     """
 
     def rate(t, a, b):
+        if not a * a + b * b <= 0.25:  # |A| > 1/sqrt(2), or NaN
+            raise FabricDivergence(t, a, b)
         d1, d2, w = kin(t)
         nD = math.sqrt(2.0 * (d1 * d1 + d2 * d2))
         if nD == 0.0:

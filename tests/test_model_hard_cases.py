@@ -137,3 +137,12 @@ def test_step_budget_stops_a_crawling_solver_with_a_clear_error():
         simulate(default_params(), heaviside(1.0, 1.0), method="RK45", rtol=1e-10, max_steps=5)
     table = simulate(default_params(), heaviside(1.0, 1.0), method="RK45", rtol=1e-6, max_steps=20000)
     assert np.isfinite(table.to_numpy(dtype=float)).all()
+
+
+def test_parameters_that_blow_the_fabric_up_stop_with_a_clear_error_not_nan():
+    from model import FabricDivergence, default_params, heaviside, params_from_dict, simulate
+
+    doc = default_params().to_dict()
+    doc["model2"] = {"c1": -0.3, "c2": 8.0, "c3": 0.0}  # alpha2 > 0: Eq. 4 grows without bound
+    with pytest.raises(FabricDivergence, match=r"diverged at t = .*exceeds 1/sqrt\(2\)"):
+        simulate(params_from_dict(doc), heaviside(1.0, 5.0), model="model2", A0=(-0.02, -0.05))
