@@ -1,21 +1,10 @@
 # Helpers shared by every rule file: the case table and the list of targets.
 import sys
 from itertools import product
-from pathlib import Path
 
 PY = sys.executable  # the venv's python that runs snakemake also runs the stages
 RESULTS = config.get("results_dir", "results")
 YADE = "yade"
-
-
-def inertial_numbers():
-    """The inertial numbers of the campaign, from I or from wall speeds U.
-
-    I = gammadot d / sqrt(p/rho) with gammadot = 2U/H and H = H_over_d * d.
-    With wall speeds, I differs per pressure; the case table handles that.
-    """
-    loading = config["loading"]
-    return loading.get("inertial_numbers")
 
 
 def _fmt(x):
