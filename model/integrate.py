@@ -9,9 +9,12 @@ Output conventions (columns of the table ``simulate`` returns):
 - ``X`` = A:D'/|D'|. Where |D'| = 0 (a rest, a zero crossing of a sinusoidal
   reversal) X is undefined; the table then reports A:N with N the last defined
   direction of D' (the one-sided limit from before; for a history that starts
-  at rest, the first direction after it). ``mu`` is the friction law at that X
-  (the friction the layer would mobilise on resuming), ``sigma_xy_over_p`` is
-  :math:`\sqrt2\,\mu\,D'_{xy}/|D'|` (= mu sign(gammadot) in simple shear), 0 at rest.
+  at rest, the first direction after it). ``mu`` = |sigma_xy|/p is the friction
+  law at that X (the friction the layer would mobilise on resuming);
+  ``sigma_xy_over_p`` is Eq. 3 with the signed ratio tau of the law
+  (``laws.stress_ratio_eq2``, ``laws.friction_quadratic``):
+  :math:`\sqrt2\,\tau(X)\,D'_{xy}/|D'|` (= tau sign(gammadot) in simple shear,
+  opposite to gammadot while X > X0 after a reversal), 0 at rest.
 - At a boundary where the rate jumps (Heaviside), two rows share the time: the
   left limit, then the right limit (X flips sign there). Where the rate is
   continuous (a zero crossing of the sinusoid) only the left row is reported.
@@ -342,13 +345,14 @@ def _table(history, p, model, friction, t, Y, seg_idx, seg_dir, X_c):
                         t=float(t[k]), X=float(X[k]), X_c=X_c)
     if friction == "eq2":
         f = p.friction_eq2
-        mu = laws.friction_eq2(X, f.X0, f.k1, f.k3, f.k5)
+        tau = laws.stress_ratio_eq2(X, f.X0, f.k1, f.k3, f.k5)
     else:
         f = p.friction_quadratic
-        mu = laws.friction_quadratic(X, f.m0, f.m1, f.m2)
-    mu = np.atleast_1d(np.asarray(mu, dtype=float))
-    # Eq. 3: sigma'/p = sqrt2 mu D'/|D'|; zero where the layer does not deform
-    sig = np.where((nD > 0) & (gd != 0.0), laws.SQRT2 * mu * n2, 0.0)
+        tau = laws.friction_quadratic(X, f.m0, f.m1, f.m2)
+    tau = np.atleast_1d(np.asarray(tau, dtype=float))
+    mu = np.abs(tau)
+    # Eq. 3 with the signed ratio: sigma'/p = sqrt2 tau(X) D'/|D'|; zero where the layer does not deform
+    sig = np.where((nD > 0) & (gd != 0.0), laws.SQRT2 * tau * n2, 0.0)
     df = pd.DataFrame({
         "t": t, "strain": strain, "gammadot": gd, "A_xx": a, "A_xy": b,
         "A_norm": laws.fabric_norm(a, b), "theta_A": laws.fabric_angle_deg(a, b),

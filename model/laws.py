@@ -44,8 +44,36 @@ def friction_eq2(X, X0, k1, k3, k5):
     return mu if mu.ndim else float(mu)
 
 
+def stress_ratio_eq2(X, X0, k1, k3, k5):
+    r"""Signed stress ratio behind Eq. 2: :math:`\tau = g\,\sigma_{xy}/p` with g = sign(gammadot).
+
+    Eq. 2 gives only the modulus, :math:`\mu = |\sigma_{xy}|/p` (the V of the
+    paper's Fig. 2b, zero at X0). OUR READING of its sign, measured on our DEM
+    (``results/calibration/<set>/fig2b_mu_vs_X.png``, right panel): the signed
+    ratio falls through zero at X0 and stays negative for X > X0, because just
+    after a reversal the contact network still carries the stress of the old
+    direction. So
+
+    .. math::
+        \tau(X) = -\mathrm{sign}(X - X_0)\,\mu(X) = \begin{cases}
+            -k_1 y + k_3 y^3 & y < 0 \\ -k_1 y - k_5 y^5 & y \ge 0 \end{cases}
+
+    a single decreasing curve (slope :math:`-k_1` on both sides of X0), with
+    :math:`|\tau| = \mu` of ``friction_eq2``. Eq. 3 uses it as
+    :math:`\sigma'/p = \sqrt2\,\tau(X)\,D'/|D'|`: still along D', but
+    opposite to it while X > X0.
+    """
+    y = np.asarray(X, dtype=float) - X0
+    tau = np.where(y < 0.0, -k1 * y + k3 * y**3, -k1 * y - k5 * y**5)
+    return tau if tau.ndim else float(tau)
+
+
 def friction_quadratic(X, m0, m1, m2):
-    r"""Friction law of the previous model [15]: :math:`\mu = m_0 + m_1 X + m_2 X^2`."""
+    r"""Friction law of the previous model [15]: :math:`\tau = m_0 + m_1 X + m_2 X^2`.
+
+    A signed stress ratio :math:`g\,\sigma_{xy}/p` (it may change sign, like
+    ``stress_ratio_eq2``); the effective friction is its modulus, :math:`\mu = |\tau|`.
+    """
     X = np.asarray(X, dtype=float)
     mu = m0 + m1 * X + m2 * X**2
     return mu if mu.ndim else float(mu)

@@ -115,7 +115,12 @@ def test_output_columns_and_sign_conventions():
     assert list(tab.columns) == ["t", "strain", "gammadot", "A_xx", "A_xy", "A_norm", "theta_A", "X", "mu",
                                  "sigma_xy_over_p"]
     fwd, back = tab[tab.gammadot > 0], tab[tab.gammadot < 0]
-    assert np.all(fwd.sigma_xy_over_p > 0) and np.all(back.sigma_xy_over_p < 0)
+    assert np.all(fwd.sigma_xy_over_p > 0)
+    # after the reversal the stress keeps its old sign while X > X0, then follows gammadot
+    X0 = default_params().friction_eq2.X0
+    assert back.X.iloc[0] > X0 and back.sigma_xy_over_p.iloc[0] > 0 and back.sigma_xy_over_p.iloc[-1] < 0
+    moving = tab[(tab.gammadot != 0) & (tab.X != X0)]
+    assert np.all(np.sign(moving.sigma_xy_over_p) == -np.sign(moving.gammadot * (moving.X - X0)))
     assert np.allclose(np.abs(tab.sigma_xy_over_p), tab.mu)
     assert tab.strain.max() == pytest.approx(1.0) and tab.strain.iloc[-1] == pytest.approx(0.0, abs=1e-12)
     assert np.all((tab.theta_A >= 0) & (tab.theta_A < 180))
