@@ -7,7 +7,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from model.laws import alpha_model1, alpha_model2, friction_eq2, friction_quadratic  # noqa: E402
+from model.laws import alpha_model1, alpha_model2, friction_eq2, friction_quadratic, stress_ratio_eq2  # noqa: E402
 
 PROTO_COLORS = {"heaviside": "tab:blue", "sinusoidal": "tab:orange", "preshear": "tab:gray"}
 
@@ -26,27 +26,40 @@ def fig2a(samples, path):
     plt.close(fig)
 
 
-def fig2b(X, mu, eq2: dict, quad: dict, path, nbins=30):
-    """Signed friction g sigma_xy/p against X: samples, binned means, Eq. 2 and quadratic fits."""
-    fig, ax = plt.subplots(figsize=(5, 4))
-    ax.plot(X, mu, ".", ms=2, color="0.75", label="DEM samples")
+def _binned_means(X, y, nbins):
     edges = np.linspace(np.min(X), np.max(X), nbins + 1)
     idx = np.digitize(X, edges) - 1
-    xm, ym, ye = [], [], []
-    for k in range(nbins):
-        m = idx == k
-        if m.sum() >= 3:
-            xm.append(X[m].mean())
-            ym.append(mu[m].mean())
-            ye.append(mu[m].std(ddof=1) / np.sqrt(m.sum()))
-    ax.errorbar(xm, ym, ye, fmt="o", ms=3, color="k", label="DEM binned mean")
+    rows = [(X[m].mean(), y[m].mean(), y[m].std(ddof=1) / np.sqrt(m.sum()))
+            for m in (idx == k for k in range(nbins)) if m.sum() >= 3]
+    return np.array(rows).T if rows else np.empty((3, 0))
+
+
+def fig2b(X, tau, eq2: dict, quad: dict, path, nbins=30):
+    """Fig. 2b, both ways: mu = |sigma_xy|/p against X (the paper's, left) and the signed ratio (right).
+
+    ``tau`` is the signed ratio g sigma_xy/p of the kept samples; both laws are
+    drawn as fitted (to tau): Eq. 2 as mu(X) on the left, as its signed form
+    ``stress_ratio_eq2`` on the right; the quadratic law as |tau| and tau.
+    """
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4))
     x = np.linspace(np.min(X), np.max(X), 300)
-    ax.plot(x, friction_eq2(x, **eq2), "r-", label="Eq. 2 fit")
-    ax.plot(x, friction_quadratic(x, **quad), "b--", label="quadratic law [15] fit")
-    ax.set_xlabel(r"$X = A:D'/|D'|$")
-    ax.set_ylabel(r"$\mu = \mathrm{sign}(\dot\gamma)\,\sigma_{xy}/p$")
-    ax.set_title("Fig. 2b: friction against X")
-    ax.legend(fontsize=8)
+    quad_tau = friction_quadratic(x, **quad)
+    panels = ((np.abs(tau), friction_eq2(x, **eq2), np.abs(quad_tau),
+               r"$\mu = |\sigma_{xy}|/p$", "Fig. 2b: friction against X (as in the paper)"),
+              (tau, stress_ratio_eq2(x, **eq2), quad_tau,
+               r"$\tau = \mathrm{sign}(\dot\gamma)\,\sigma_{xy}/p$", "signed stress ratio (the data fitted)"))
+    for ax, (y, eq2_line, quad_line, ylabel, title) in zip(axes, panels):
+        ax.plot(X, y, ".", ms=2, color="0.75", label="DEM samples")
+        xm, ym, ye = _binned_means(X, y, nbins)
+        ax.errorbar(xm, ym, ye, fmt="o", ms=3, color="k", label="DEM binned mean")
+        ax.plot(x, eq2_line, "r-", label="Eq. 2 fit")
+        ax.plot(x, quad_line, "b--", label="quadratic law [15] fit")
+        ax.axvline(eq2["X0"], color="r", lw=0.6, ls=":")
+        ax.set_xlabel(r"$X = A:D'/|D'|$")
+        ax.set_ylabel(ylabel)
+        ax.set_title(title, fontsize=10)
+    axes[1].axhline(0.0, color="0.5", lw=0.6)
+    axes[0].legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(path, dpi=130)
     plt.close(fig)

@@ -11,13 +11,17 @@ steady X):
 
 each divided by the standard error of the DEM's ensemble steady value and
 multiplied by ``steady_weight``. X_c is bounded below by the mirrored steady
-X (:math:`-X_{ss}`) and by the largest X of any fitted bin, plus ``xc_margin``,
-so a reversal from steady state never starts at or past the pole.
+X (:math:`-X_{ss}`), the mirrored X of every run just before its reversal and
+the largest X of any fitted bin, plus ``xc_margin`` (``xc_lower_bound``), so a
+reversal from any calibration run's state never starts at or past the pole.
 
 Fabric fits (Eq. 6, Model 2) use the back-solved bins (``backsolve.binned``,
 ``used`` ones only), each whitened by its 2x2 covariance. Friction fits use
-every kept sample: X from the smoothed fabric and the *signed* friction
-:math:`g\,\sigma_{xy}/p` (unbiased where mu ~ 0, unlike |sigma_xy|/p).
+every kept sample: X from the smoothed fabric and the *signed* stress ratio
+:math:`\tau = g\,\sigma_{xy}/p` (unbiased where mu ~ 0, unlike |sigma_xy|/p).
+Eq. 2 is fitted through its signed form ``laws.stress_ratio_eq2``,
+:math:`\tau = -\mathrm{sign}(X - X_0)\,\mu(X)`, so its V about X0 follows the
+DEM's tau falling through zero (the paper's Fig. 2b plots the modulus).
 """
 from __future__ import annotations
 
@@ -26,9 +30,13 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import least_squares
 
-from model.laws import alpha_model1, alpha_model2, friction_eq2, friction_quadratic, steady_state_constant
+from model.laws import alpha_model1, alpha_model2, friction_quadratic, steady_state_constant, stress_ratio_eq2
 
 SQRT2 = np.sqrt(2.0)
+#: Sign constraints of the fits (MODEL.md's reading): (block, parameter) -> (low, high).
+#: X_c's lower bound depends on the data (``xc_lower_bound``).
+SIGN_BOUNDS = {("friction_eq2", "k5"): (0.0, np.inf), ("model1", "c1"): (-np.inf, 0.0),
+               ("model1", "c2"): (0.0, np.inf)}
 EQ2_KEYS = ("X0", "k1", "k3", "k5")
 QUAD_KEYS = ("m0", "m1", "m2")
 M1_KEYS = ("a1", "b1", "c1", "a2", "b2", "c2", "X_c")
@@ -58,12 +66,12 @@ def _steady_fabric_residuals(alpha1, alpha2, steady, weight):
 
 
 def fit_eq2(X, mu, sigma_mu, steady, steady_weight=1.0, x0=(0.028, 2.7, 20.0, 9.0e4)) -> FitResult:
-    r"""Fit Eq. 2, :math:`\mu(X; X_0, k_1, k_3, k_5)` (``model.laws.friction_eq2``).
+    r"""Fit Eq. 2, :math:`\mu(X; X_0, k_1, k_3, k_5)`, through its signed form ``model.laws.stress_ratio_eq2``.
 
     Parameters
     ----------
     X, mu : arrays
-        State variable and (signed) friction of the kept samples.
+        State variable and signed stress ratio :math:`g\,\sigma_{xy}/p` of the kept samples.
     sigma_mu : float
         Noise of one friction sample.
     steady : dict
@@ -74,11 +82,11 @@ def fit_eq2(X, mu, sigma_mu, steady, steady_weight=1.0, x0=(0.028, 2.7, 20.0, 9.
 
     def res(p):
         X0, k1, k3, k5 = p * scale
-        r = (friction_eq2(X, X0, k1, k3, k5) - mu) / sigma_mu
-        rs = steady_weight * (friction_eq2(steady["X"], X0, k1, k3, k5) - steady["mu"]) / steady["se_mu"]
+        r = (stress_ratio_eq2(X, X0, k1, k3, k5) - mu) / sigma_mu
+        rs = steady_weight * (stress_ratio_eq2(steady["X"], X0, k1, k3, k5) - steady["mu"]) / steady["se_mu"]
         return np.append(r, rs)
 
-    lo = np.array([-0.5, 0.0, -1e6, 0.0]) / scale  # k5 >= 0 keeps mu >= 0 for X > X0
+    lo = np.array([-0.5, 0.0, -1e6, 0.0]) / scale  # k5 >= 0: tau keeps falling for X > X0
     hi = np.array([0.5, 1e3, 1e6, 1e12]) / scale
     best = None
     for start in (np.array(x0), np.array([0.0, 3.0, 0.0, 0.0]), np.array([0.03, 2.0, 100.0, 1e5])):
@@ -132,10 +140,16 @@ def _bin_residuals(alpha1, alpha2, bins, W):
     return np.einsum("kij,kj->ki", W, d).ravel()
 
 
-def xc_lower_bound(bins, steady, margin):
-    """Smallest X_c allowed: above the mirrored steady X and every fitted bin's mean X."""
-    xs = [-steady["X"]]
-    if len(bins):
+def xc_lower_bound(steady, margin, bins=None):
+    """Smallest X_c allowed, ``margin`` above the largest X the model must reach.
+
+    That is the mirrored steady X of the ensemble, the mirrored X of every run
+    just before its reversal (``steady["X_reversal_max"]``: a reversal from the
+    DEM state, as ``compare`` starts one, must begin below the pole), and, for
+    the back-solve fit, every fitted bin's mean X.
+    """
+    xs = [-steady["X"], steady.get("X_reversal_max", -np.inf)]
+    if bins is not None and len(bins):
         xs.append(float(bins["X_mean"].max()))
     return max(xs) + margin
 
@@ -155,7 +169,7 @@ def fit_model1(bins, steady, steady_weight=1.0, xc_margin=2e-3, x0=None) -> FitR
         raise ValueError(f"Model 1 fit: only {len(b)} usable bins of alpha(X); at least 4 are needed")
     W = _whiteners(b)
     X = b["X_mean"].to_numpy()
-    xc_lo = xc_lower_bound(b, steady, xc_margin)
+    xc_lo = xc_lower_bound(steady, xc_margin, b)
     scale = np.array([1.0, 10.0, 1e3, 1.0, 10.0, 1e3, 0.01])
 
     def unpack(p):

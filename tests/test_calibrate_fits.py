@@ -1,0 +1,48 @@
+"""The law fits and the parameter table: exact on closed forms, honest about constraints."""
+import numpy as np
+import pandas as pd
+import pytest
+
+from calibrate import fits, tables
+from model.laws import friction_eq2, stress_ratio_eq2
+
+TRUE_EQ2 = dict(X0=0.035, k1=2.4, k3=15.0, k5=2.0e4)
+
+
+def test_signed_eq2_is_minus_sign_of_y_times_mu_and_falls_through_zero_at_X0():
+    X = np.linspace(-0.12, 0.12, 241)
+    tau = stress_ratio_eq2(X, **TRUE_EQ2)
+    np.testing.assert_allclose(np.abs(tau), friction_eq2(X, **TRUE_EQ2), rtol=0, atol=1e-15)
+    assert np.all(np.diff(tau) < 0)                       # one decreasing curve ...
+    assert stress_ratio_eq2(TRUE_EQ2["X0"], **TRUE_EQ2) == 0.0   # ... through zero at X0
+    assert np.all(tau[X > TRUE_EQ2["X0"]] < 0)
+
+
+def test_eq2_fit_recovers_its_parameters_from_signed_samples_on_both_sides_of_X0():
+    X = np.linspace(-0.12, 0.11, 400)                     # y from -0.155 to +0.075: both branches
+    tau = stress_ratio_eq2(X, **TRUE_EQ2)
+    steady = {"X": -0.08, "mu": stress_ratio_eq2(-0.08, **TRUE_EQ2), "se_mu": 0.01}
+    fit = fits.fit_eq2(X, tau, 0.01, steady)
+    for k, v in TRUE_EQ2.items():
+        assert fit.values[k] == pytest.approx(v, rel=1e-4), k
+    assert fit.rms < 1e-8
+
+
+def test_X_c_lower_bound_lies_beyond_every_state_a_reversal_starts_from():
+    steady = {"X": -0.080, "X_reversal_max": 0.095}
+    assert fits.xc_lower_bound(steady, 0.002) == pytest.approx(0.097)      # the noisiest seed, not the mean
+    bins = pd.DataFrame({"X_mean": [-0.05, 0.1]})
+    assert fits.xc_lower_bound(steady, 0.002, bins) == pytest.approx(0.102)
+    assert fits.xc_lower_bound({"X": -0.080}, 0.002) == pytest.approx(0.082)
+
+
+def test_parameter_table_notes_values_held_by_a_constraint_or_outside_their_interval():
+    iv = pd.DataFrame({"route": ["curves"] * 3, "block": ["model1"] * 3, "parameter": ["X_c", "c1", "a1"],
+                       "low": [0.097, -10.0, -1.0], "high": [0.12, -1.0, -0.5]})
+    fitted = {("curves", "model1"): {"X_c": 0.097, "c1": -20.0, "a1": -0.8}}
+    tab = tables.params_table(fitted, iv, {"model1": "curves"},
+                              {("curves", "model1", "X_c"): (0.097, np.inf), ("curves", "model1", "c1"): (-np.inf, 0.0)})
+    note = dict(zip(tab["parameter"], tab["note"]))
+    assert "lower bound 0.097" in note["X_c"]
+    assert "outside its bootstrap interval" in note["c1"] and "bound" not in note["c1"]
+    assert note["a1"] == ""
