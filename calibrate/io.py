@@ -25,7 +25,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from dem_contract import CONTRACT_COLUMNS, REVERSAL_PROTOCOLS, DEMInputError, read_series, read_sidecar
+from dem_contract import (CONTRACT_COLUMNS, REVERSAL_PROTOCOLS, DEMInputError, pre_reversal_state, read_series,
+                          read_sidecar)
 
 #: The columns the calibration computes with: they must be finite in every row.
 USED_COLUMNS = ("t", "strain", "gammadot", "A_xx", "A_xy", "sigma_xy", "p", "mu")
@@ -271,6 +272,8 @@ def steady_values(cases) -> dict:
 
     Returns ``A_xx, A_xy, X, mu, A_norm, theta_A`` and ``se_*`` (X = sqrt2 A_xy for
     the positive pre-shear direction). With one seed the SE is the run's own.
+    ``X_reversal_max`` is the largest mirrored X a run's reversal starts from
+    (``dem_contract.pre_reversal_state``): Model 1's pole must lie beyond it.
     """
     rows = []
     for c in cases:
@@ -290,4 +293,6 @@ def steady_values(cases) -> dict:
            "X": np.sqrt(2) * b, "se_X": np.sqrt(2) * se[1], "n_seeds": n}
     out["A_norm"] = float(np.sqrt(2 * (a**2 + b**2)))
     out["theta_A"] = float(np.mod(np.degrees(0.5 * np.arctan2(b, a)), 180.0))
+    # the largest X any run starts its reversal from (mirrored state at the end of its pre-shear)
+    out["X_reversal_max"] = max(-pre_reversal_state(c.preshear.data)["X"] for c in cases)
     return {k: float(v) for k, v in out.items()}

@@ -12,7 +12,7 @@ import pandas as pd
 
 from model import default_params, params_from_dict, steady_state
 
-from . import backsolve, bootstrap, figures, io, route1, route2, smoothing, tables
+from . import backsolve, bootstrap, figures, fits, io, route1, route2, smoothing, tables
 
 BLOCKS = ("friction_eq2", "friction_quadratic", "model1", "model2")
 
@@ -42,7 +42,7 @@ def _route2_start(replays, doc, model, r1_values, steady, sigma_mu, s2, xc_margi
     """First start with a finite score: the route-1 values, their linear part, the model defaults."""
     cands = [r1_values]
     if model == "model1":
-        lin = dict(r1_values, c1=-1.0, c2=1.0, X_c=max(r1_values["X_c"], -steady["X"] + xc_margin + 0.01))
+        lin = dict(r1_values, c1=-1.0, c2=1.0, X_c=max(r1_values["X_c"], fits.xc_lower_bound(steady, xc_margin) + 0.01))
         cands += [lin, default_params().model1.__dict__]
     else:
         cands += [default_params().model2.__dict__]
@@ -143,6 +143,8 @@ def run(case_dirs, out, settings: Settings = Settings(), log=print, argv=None) -
     for model in ("model1", "model2"):
         final[model] = (doc1 if default_route[model] == "backsolve" else doc2)[model]
     ss = steady_check(final, steady)
+    xc_bound = {"backsolve": r1["model1"].extra["X_c_lower_bound"],
+                "curves": fits.xc_lower_bound(steady, settings.xc_margin)}
     for q in quality:
         doc = dict(final)
         doc[q["model"]] = (doc1 if q["route"] == "backsolve" else doc2)[q["model"]]
@@ -152,6 +154,9 @@ def run(case_dirs, out, settings: Settings = Settings(), log=print, argv=None) -
         if q["model"] == "model1":
             q["X_c"] = doc["model1"]["X_c"]
             q["mirrored_steady_X_below_X_c"] = bool("X" in s and -s["X"] < doc["model1"]["X_c"])
+            q["dem_X_reversal_max"] = steady["X_reversal_max"]
+            q["X_c_lower_bound"] = xc_bound[q["route"]]
+            q["X_c_at_lower_bound"] = bool(q["X_c"] <= q["X_c_lower_bound"] * (1 + 1e-6))
     for name, fr in (("friction_eq2", r1["friction_eq2"]), ("friction_quadratic", r1["friction_quadratic"])):
         quality.append({"model": name, "route": "mu_vs_X", "insample_rms_mu": fr.rms, "fit_cost": fr.cost,
                         "fit_message": fr.message, "default": True})
@@ -161,7 +166,10 @@ def run(case_dirs, out, settings: Settings = Settings(), log=print, argv=None) -
               ("mu_vs_X", "friction_quadratic"): doc1["friction_quadratic"],
               ("backsolve", "model1"): doc1["model1"], ("curves", "model1"): doc2["model1"],
               ("backsolve", "model2"): doc1["model2"], ("curves", "model2"): doc2["model2"]}
-    ptab = tables.params_table(fitted, iv, default_route)
+    bounds = {(route, block, name): b for (block, name), b in fits.SIGN_BOUNDS.items()
+              for route in ("mu_vs_X", "backsolve", "curves")}
+    bounds.update({(route, "model1", "X_c"): (xb, np.inf) for route, xb in xc_bound.items()})
+    ptab = tables.params_table(fitted, iv, default_route, bounds)
     intervals = {}
     for _, row in ptab[ptab["default"]].iterrows():
         intervals.setdefault(row["block"], {})[row["parameter"]] = [float(row["low"]), float(row["high"])]

@@ -183,13 +183,13 @@ def fit(replays, base_params: dict, model: str, start: dict, steady: dict, sigma
         ``io.steady_values``.
     sigma_mu : float
     x_lower : float, optional
-        Lower bound of X_c (Model 1); default ``-steady X + xc_margin``.
+        Lower bound of X_c (Model 1); default ``fits.xc_lower_bound(steady, xc_margin)``.
     """
     friction = "eq2" if model == "model1" else "quadratic"
     keys = fits.M1_KEYS if model == "model1" else fits.M2_KEYS
     if model == "model1":
         scale = np.array([1.0, 10.0, 1e3, 1.0, 10.0, 1e3, 0.01])
-        xl = (-steady["X"] + settings.xc_margin) if x_lower is None else x_lower
+        xl = fits.xc_lower_bound(steady, settings.xc_margin) if x_lower is None else x_lower
         lo = np.array([-1e3, -1e5, -1e9, -1e3, -1e5, 0.0, xl]) / scale
         hi = np.array([1e3, 1e5, 0.0, 1e3, 1e5, 1e9, 0.5]) / scale
     else:

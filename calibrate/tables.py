@@ -1,4 +1,5 @@
-"""Output tables: params.yaml (``model.params`` format), params_table.csv, backsolve_alpha_vs_X.csv, fit_quality.csv."""
+"""Output tables: params.yaml (``model.params`` format), params_table.csv (with a note on
+values held by a constraint or outside their interval), backsolve_alpha_vs_X.csv, fit_quality.csv."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -13,12 +14,26 @@ ROUTE_NAMES = {"backsolve": "route 1: back-solve of Eq. 4, fit to alpha(X) bins"
                "mu_vs_X": "friction law fitted to mu(X) samples"}
 
 
-def params_table(fitted: dict, iv: pd.DataFrame, default_route: dict) -> pd.DataFrame:
-    """Rows (block, parameter, value, low, high, route, default).
+def _note(value, lo, hi, bounds) -> str:
+    """Warnings a reader of the table needs: a value on its constraint, or outside its own interval."""
+    notes = []
+    for side, b in zip(("lower", "upper"), bounds):
+        if np.isfinite(b) and abs(value - b) <= 1e-6 * max(abs(b), 1.0):
+            notes.append(f"at its {side} bound {b:.6g} (the constraint, not the data, sets it)")
+    if np.isfinite(lo) and np.isfinite(hi) and not lo <= value <= hi:
+        notes.append("outside its bootstrap interval (replicates do not scatter about it: poorly identified)")
+    return "; ".join(notes)
+
+
+def params_table(fitted: dict, iv: pd.DataFrame, default_route: dict, bounds: dict | None = None) -> pd.DataFrame:
+    """Rows (block, parameter, value, low, high, route, default, note).
 
     ``fitted`` maps (route, block) -> values dict; ``iv`` is ``bootstrap.intervals``;
-    ``default_route`` maps block -> the route written to params.yaml.
+    ``default_route`` maps block -> the route written to params.yaml; ``bounds``
+    maps (route, block, parameter) -> (low, high), the fit's constraints, which
+    ``note`` reports when a value sits on one.
     """
+    bounds = bounds or {}
     rows = []
     for (route, block), vals in fitted.items():
         iv_route = "backsolve" if route == "mu_vs_X" else route
@@ -26,7 +41,8 @@ def params_table(fitted: dict, iv: pd.DataFrame, default_route: dict) -> pd.Data
             m = iv[(iv["route"] == iv_route) & (iv["block"] == block) & (iv["parameter"] == name)]
             lo, hi = (float(m["low"].iloc[0]), float(m["high"].iloc[0])) if len(m) else (np.nan, np.nan)
             rows.append({"block": block, "parameter": name, "value": v, "low": lo, "high": hi, "route": route,
-                         "default": default_route.get(block) == route})
+                         "default": default_route.get(block) == route,
+                         "note": _note(v, lo, hi, bounds.get((route, block, name), (-np.inf, np.inf)))})
     return pd.DataFrame(rows)
 
 

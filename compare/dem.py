@@ -14,9 +14,9 @@ Conventions
   ``reversal_strain``, yade_scripts/SCENE.md; rows before it are dropped), or
   at the first sample of the reversal CSV when the sidecar lacks them.
 - The initial fabric ``A0`` is the mean of ``(A_xx, A_xy)`` over the pre-shear
-  samples within ``a0_window`` strain of its end (at least ``MIN_A0_SAMPLES``
-  samples): the DEM fabric just before the reversal, with its per-sample noise
-  averaged down.
+  samples within ``a0_window`` strain of its end (``dem_contract.pre_reversal_state``,
+  the same state the calibration bounds X_c with): the DEM fabric just before
+  the reversal, with its per-sample noise averaged down.
 - ``steady_A`` (= |mean A|) and ``steady_mu`` (mean mu) over the same window
   are the steady values the reversal recovers towards (by symmetry the mirrored
   steady state has the same |A| and mu).
@@ -33,12 +33,12 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from dem_contract import REVERSAL_PROTOCOLS, DEMInputError, read_series, read_sidecar
+from dem_contract import (PRE_REVERSAL_WINDOW, REVERSAL_PROTOCOLS, DEMInputError, pre_reversal_state, read_series,
+                          read_sidecar)
 
 USED_COLUMNS = ("t", "strain", "gammadot", "A_xx", "A_xy", "mu")
 LABEL_RE = re.compile(r"^(?P<group>p[^_]+_I[^_]+)_s(?P<seed>[^_/]+)$")
-MIN_A0_SAMPLES = 10
-A0_WINDOW = 0.1       # strain over which the pre-reversal fabric is averaged
+A0_WINDOW = PRE_REVERSAL_WINDOW   # strain over which the pre-reversal fabric is averaged
 MIN_SAMPLES = 10
 
 
@@ -133,20 +133,15 @@ def load_reversal(case_dir, protocol: str, a0_window: float = A0_WINDOW) -> Reve
             raise DEMInputError(f"{path}: fewer than {MIN_SAMPLES} samples after reversal_t = {t_rev}")
         if "reversal_strain" in meta:
             s_rev0 = float(meta["reversal_strain"])
-    # the pre-shear's direction, and a check that the reversal opposes it
-    g_pre = float(np.median(pre["gammadot"].to_numpy()[-max(MIN_A0_SAMPLES, len(pre) // 10):]))
+    # the state before the reversal (dem_contract), and a check that the reversal opposes it
+    st = pre_reversal_state(pre, a0_window)
+    g_pre = st["gammadot"]
     g_rev = rev["gammadot"].to_numpy()
     if g_pre == 0.0 or not np.any(g_rev * g_pre < 0):
         raise DEMInputError(f"{path}: the rate never opposes the pre-shear's (median {g_pre:.4g}): no reversal")
-    s_pre = pre["strain"].to_numpy()
-    win = s_pre >= s_pre[-1] - a0_window if g_pre > 0 else s_pre <= s_pre[-1] + a0_window
-    if win.sum() < MIN_A0_SAMPLES:
-        win = np.zeros(len(pre), bool)
-        win[-MIN_A0_SAMPLES:] = True
-    a0 = float(pre["A_xx"].to_numpy()[win].mean())
-    b0 = float(pre["A_xy"].to_numpy()[win].mean())
+    a0, b0 = st["A_xx"], st["A_xy"]
     steady_A = float(_fabric(a0, b0)[0])
-    steady_mu = float(pre["mu"].to_numpy()[win].mean())
+    steady_mu = st["mu"]
     data = rev.copy()
     t0 = float(data["t"].iloc[0]) if t_rev is None else t_rev
     strain0 = float(data["strain"].iloc[0]) if s_rev0 is None else s_rev0

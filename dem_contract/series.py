@@ -100,3 +100,41 @@ def read_sidecar(path) -> dict:
     if not isinstance(meta, dict):
         raise DEMInputError(f"{side}: expected a JSON object")
     return meta
+
+
+#: Strain at the end of a pre-shear over which the fabric before a reversal is averaged.
+PRE_REVERSAL_WINDOW = 0.1
+#: Fewest samples in that average (the last ones are taken if the window holds fewer).
+MIN_PRE_REVERSAL_SAMPLES = 10
+
+
+def pre_reversal_state(pre, window: float = PRE_REVERSAL_WINDOW):
+    r"""The DEM state just before a reversal, from the end of the pre-shear.
+
+    Parameters
+    ----------
+    pre : pandas.DataFrame
+        The pre-shear run (``strain``, ``gammadot``, ``A_xx``, ``A_xy``, ``mu``).
+    window : float
+        Strain at the end of the pre-shear to average over (at least
+        ``MIN_PRE_REVERSAL_SAMPLES`` samples): the per-sample noise of the
+        fabric is averaged down, the run's own offset from the ensemble is kept.
+
+    Returns
+    -------
+    dict
+        ``A_xx``, ``A_xy``, ``mu`` (means over the window), ``gammadot`` (the
+        median rate of the last tenth of the run), its sign ``gammadot_sign``
+        (0 if the run does not move) and ``X`` :math:`= \sqrt2 A_{xy}\,\mathrm{sign}(\dot\gamma)`
+        (MODEL.md); a reversal starts from :math:`-X`, the *mirrored* X.
+    """
+    n = len(pre)
+    rate = float(np.median(pre["gammadot"].to_numpy()[-max(MIN_PRE_REVERSAL_SAMPLES, n // 10):]))
+    g = float(np.sign(rate))
+    s = pre["strain"].to_numpy()
+    win = s >= s[-1] - window if g >= 0 else s <= s[-1] + window
+    if win.sum() < MIN_PRE_REVERSAL_SAMPLES:
+        win = np.zeros(n, bool)
+        win[-MIN_PRE_REVERSAL_SAMPLES:] = True
+    a, b, mu = (float(pre[c].to_numpy()[win].mean()) for c in ("A_xx", "A_xy", "mu"))
+    return {"A_xx": a, "A_xy": b, "mu": mu, "gammadot": rate, "gammadot_sign": g, "X": float(np.sqrt(2.0) * b * g)}

@@ -87,3 +87,17 @@ def test_both_stages_raise_the_contract_error():
     import compare
     assert calibrate.DEMInputError is calibrate.io.DEMInputError is compare.DEMInputError is DEMInputError
     assert issubclass(DEMInputError, ValueError)
+
+
+@pytest.mark.parametrize("g", [1.0, -1.0])
+def test_pre_reversal_state_averages_the_last_window_of_strain_and_signs_X_by_the_rate(g):
+    from dem_contract import pre_reversal_state
+    n = 200
+    strain = g * np.linspace(0.0, 1.0, n)           # 1 strain in the direction g
+    b = np.where(np.abs(strain) > 0.9, -0.06 * g, 0.5)  # last 0.1 strain: b = -0.06 g (the rest must not count)
+    pre = pd.DataFrame({"strain": strain, "gammadot": np.full(n, 2.0 * g), "A_xx": np.where(np.abs(strain) > 0.9, 0.01, 9.0),
+                        "A_xy": b, "mu": np.where(np.abs(strain) > 0.9, 0.3, 9.0)})
+    st = pre_reversal_state(pre, window=0.1)
+    assert st["A_xx"] == pytest.approx(0.01) and st["A_xy"] == pytest.approx(-0.06 * g) and st["mu"] == pytest.approx(0.3)
+    assert st["gammadot"] == 2.0 * g and st["gammadot_sign"] == g
+    assert st["X"] == pytest.approx(-0.06 * np.sqrt(2.0))   # X < 0 at steady state, whichever the direction
