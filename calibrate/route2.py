@@ -47,7 +47,7 @@ class Route2Settings:
     atol: float = 1e-9
     max_steps: int = 20000  # per history segment: a trial set past it scores as failed
     diff_step: float = 1e-3
-    max_evals: int = 150
+    max_evals: int = 300   # Model 1 on the quick campaign used 150 up before converging
     mu_weight: float = 1.0
     steady_weight: float = 1.0
     xc_margin: float = 2e-3
