@@ -119,6 +119,7 @@ def run(case_dirs, out, settings: Settings = Settings(), log=print, argv=None) -
 
     # scores: in-sample and held-out; choose the default route per model
     quality, default_route = [], {"friction_eq2": "mu_vs_X", "friction_quadratic": "mu_vs_X"}
+    n_used = int(r1["bins"].loc[r1["bins"]["used"], "n_samples"].sum())  # samples in the bins route 1 fits
     for model in ("model1", "model2"):
         best, best_score = "backsolve", math.inf
         for route, doc in (("backsolve", doc1), ("curves", doc2)):
@@ -135,7 +136,9 @@ def run(case_dirs, out, settings: Settings = Settings(), log=print, argv=None) -
                             "heldout_rms_A_norm": float(h["rms_A_norm"].mean()) if len(h) else math.nan,
                             "heldout_rms_theta_A": float(h["rms_theta_A"].mean()) if len(h) else math.nan,
                             "heldout_rms_mu": float(h["rms_mu"].mean()) if len(h) else math.nan,
-                            "heldout_replicates": len(h), "fit_cost": fr.cost, "fit_message": fr.message})
+                            "heldout_replicates": len(h), "fit_cost": fr.cost, "fit_message": fr.message,
+                            "n_samples": n_used if route == "backsolve" else fr.n_data // 3,
+                            "n_bins": int(r1["bins"]["used"].sum()) if route == "backsolve" else math.nan})
         default_route[model] = best
     for q in quality:
         q["default"] = default_route[q["model"]] == q["route"]
@@ -159,7 +162,7 @@ def run(case_dirs, out, settings: Settings = Settings(), log=print, argv=None) -
             q["X_c_at_lower_bound"] = bool(q["X_c"] <= q["X_c_lower_bound"] * (1 + 1e-6))
     for name, fr in (("friction_eq2", r1["friction_eq2"]), ("friction_quadratic", r1["friction_quadratic"])):
         quality.append({"model": name, "route": "mu_vs_X", "insample_rms_mu": fr.rms, "fit_cost": fr.cost,
-                        "fit_message": fr.message, "default": True})
+                        "fit_message": fr.message, "default": True, "n_samples": fr.n_data})
 
     # tables
     fitted = {("mu_vs_X", "friction_eq2"): doc1["friction_eq2"],

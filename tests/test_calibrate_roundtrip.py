@@ -94,6 +94,7 @@ def test_outputs_hold_values_intervals_and_provenance(dem_noise_run):
     assert set(tab["route"]) == {"mu_vs_X", "backsolve", "curves"}
     q = pd.read_csv(out / "fit_quality.csv")
     assert q["mirrored_steady_X_below_X_c"].dropna().astype(bool).all()
+    assert (q["n_samples"] > 100).all()   # how many samples each fit used
 
 
 @pytest.mark.slow
