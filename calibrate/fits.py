@@ -11,9 +11,10 @@ steady X):
 
 each divided by the standard error of the DEM's ensemble steady value and
 multiplied by ``steady_weight``. X_c is bounded below by the mirrored steady
-X (:math:`-X_{ss}`), the mirrored X of every run just before its reversal and
-the largest X of any fitted bin, plus ``xc_margin`` (``xc_lower_bound``), so a
-reversal from any calibration run's state never starts at or past the pole.
+X (:math:`-X_{ss}`), the mirrored X of every run just before its reversal (and
+the 97.5 % prediction bound of it for a new seed) and the largest X of any
+fitted bin, plus ``xc_margin`` (``xc_lower_bound``), so a reversal from a
+calibration run's state, or most likely a new one's, starts below the pole.
 
 Fabric fits (Eq. 6, Model 2) use the back-solved bins (``backsolve.binned``,
 ``used`` ones only), each whitened by its 2x2 covariance. Friction fits use
@@ -143,12 +144,13 @@ def _bin_residuals(alpha1, alpha2, bins, W):
 def xc_lower_bound(steady, margin, bins=None):
     """Smallest X_c allowed, ``margin`` above the largest X the model must reach.
 
-    That is the mirrored steady X of the ensemble, the mirrored X of every run
-    just before its reversal (``steady["X_reversal_max"]``: a reversal from the
-    DEM state, as ``compare`` starts one, must begin below the pole), and, for
-    the back-solve fit, every fitted bin's mean X.
+    That is the mirrored steady X of the ensemble, the X a reversal from the
+    DEM state starts from (``steady["X_reversal_bound"]``: every run's, and the
+    97.5 % prediction bound for a new seed, ``io.steady_values``; a reversal
+    must begin below the pole), and, for the back-solve fit, every fitted bin's
+    mean X.
     """
-    xs = [-steady["X"], steady.get("X_reversal_max", -np.inf)]
+    xs = [-steady["X"], steady.get("X_reversal_bound", -np.inf)]
     if bins is not None and len(bins):
         xs.append(float(bins["X_mean"].max()))
     return max(xs) + margin

@@ -24,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from scipy.stats import t as student_t
 
 from dem_contract import (CONTRACT_COLUMNS, REVERSAL_PROTOCOLS, DEMInputError, pre_reversal_state, read_series,
                           read_sidecar)
@@ -273,7 +274,10 @@ def steady_values(cases) -> dict:
     Returns ``A_xx, A_xy, X, mu, A_norm, theta_A`` and ``se_*`` (X = sqrt2 A_xy for
     the positive pre-shear direction). With one seed the SE is the run's own.
     ``X_reversal_max`` is the largest mirrored X a run's reversal starts from
-    (``dem_contract.pre_reversal_state``): Model 1's pole must lie beyond it.
+    (``dem_contract.pre_reversal_state``), ``X_reversal_bound`` the larger of it
+    and the upper 97.5 % prediction bound of that X for a new seed,
+    :math:`\bar x + t_{0.975, n-1}\, s \sqrt{1 + 1/n}`: Model 1's pole must lie
+    beyond it, or a new run may start past the pole.
     """
     rows = []
     for c in cases:
@@ -293,6 +297,23 @@ def steady_values(cases) -> dict:
            "X": np.sqrt(2) * b, "se_X": np.sqrt(2) * se[1], "n_seeds": n}
     out["A_norm"] = float(np.sqrt(2 * (a**2 + b**2)))
     out["theta_A"] = float(np.mod(np.degrees(0.5 * np.arctan2(b, a)), 180.0))
-    # the largest X any run starts its reversal from (mirrored state at the end of its pre-shear)
-    out["X_reversal_max"] = max(-pre_reversal_state(c.preshear.data)["X"] for c in cases)
+    # the X a reversal starts from (mirrored state at the end of each pre-shear): the largest
+    # seen, and the upper 97.5 % prediction bound for a new seed (Student t over the seeds)
+    xr = np.array([-pre_reversal_state(c.preshear.data)["X"] for c in cases])
+    out["X_reversal_max"] = float(xr.max())
+    out["X_reversal_bound"] = reversal_start_bound(xr)
     return {k: float(v) for k, v in out.items()}
+
+
+def reversal_start_bound(x, level=0.975) -> float:
+    r"""Largest of ``x`` and its upper prediction bound for one more draw.
+
+    .. math:: \bar x + t_{level, n-1}\, s \sqrt{1 + 1/n}
+
+    (Student t, s the sample standard deviation); ``max(x)`` for a single value.
+    """
+    x = np.asarray(x, dtype=float)
+    if len(x) < 2:
+        return float(x.max())
+    n = len(x)
+    return float(max(x.mean() + student_t.ppf(level, n - 1) * x.std(ddof=1) * np.sqrt(1 + 1 / n), x.max()))

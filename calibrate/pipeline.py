@@ -58,6 +58,29 @@ def _route2_start(replays, doc, model, r1_values, steady, sigma_mu, s2, xc_margi
     return dict(r1_values)
 
 
+def choose_route(heldout: pd.DataFrame, insample: dict) -> str:
+    """The default route of a model: route 2 ("curves") unless route 1 predicts held-out seeds *clearly* better.
+
+    The route whose replicates fail to predict fewer held-out runs (a pole, a
+    diverging fabric) wins. Otherwise route 2 minimises the prediction error
+    itself, so it is the default; the back-solve route wins only if its
+    held-out score is lower by more than two standard errors of the paired
+    difference over the replicates. Without held-out replicates, the lower
+    in-sample score wins.
+    """
+    if len(heldout):
+        wide = heldout.pivot(index="replicate", columns="route", values="score")
+        if {"backsolve", "curves"} <= set(wide.columns):
+            fails = (~np.isfinite(wide[["backsolve", "curves"]])).sum()
+            if fails["backsolve"] != fails["curves"]:
+                return "backsolve" if fails["backsolve"] < fails["curves"] else "curves"
+            d = (wide["backsolve"] - wide["curves"]).to_numpy()
+            d = d[np.isfinite(d)]
+            if len(d) > 1:
+                return "backsolve" if d.mean() < -2.0 * d.std(ddof=1) / np.sqrt(len(d)) else "curves"
+    return "backsolve" if insample["backsolve"] < insample["curves"] else "curves"
+
+
 def steady_check(doc, steady) -> dict:
     """Steady state implied by each model block (``model.steady_state``) against the DEM's."""
     out = {}
@@ -121,14 +144,12 @@ def run(case_dirs, out, settings: Settings = Settings(), log=print, argv=None) -
     quality, default_route = [], {"friction_eq2": "mu_vs_X", "friction_quadratic": "mu_vs_X"}
     n_used = int(r1["bins"].loc[r1["bins"]["used"], "n_samples"].sum())  # samples in the bins route 1 fits
     for model in ("model1", "model2"):
-        best, best_score = "backsolve", math.inf
+        ins_scores = {}
         for route, doc in (("backsolve", doc1), ("curves", doc2)):
             ins = route2.score(params_from_dict(doc), replays, model, settings.route2, sigma_mu)
+            ins_scores[route] = ins["score"]
             h = heldout[(heldout["route"] == route) & (heldout["model"] == model)] if len(heldout) else heldout
             h_score = float(h["score"].replace(np.inf, 1e300).mean()) if len(h) else math.nan
-            crit = h_score if len(h) else ins["score"]
-            if crit < best_score:
-                best, best_score = route, crit
             fr = (r1[model] if route == "backsolve" else r2[model])
             quality.append({"model": model, "route": route, "insample_score": ins["score"],
                             "insample_rms_A_norm": ins["rms_A_norm"], "insample_rms_theta_A": ins["rms_theta_A"],
@@ -139,7 +160,8 @@ def run(case_dirs, out, settings: Settings = Settings(), log=print, argv=None) -
                             "heldout_replicates": len(h), "fit_cost": fr.cost, "fit_message": fr.message,
                             "n_samples": n_used if route == "backsolve" else fr.n_data // 3,
                             "n_bins": int(r1["bins"]["used"].sum()) if route == "backsolve" else math.nan})
-        default_route[model] = best
+        default_route[model] = choose_route(heldout[heldout["model"] == model] if len(heldout) else heldout,
+                                            ins_scores)
     for q in quality:
         q["default"] = default_route[q["model"]] == q["route"]
     final = dict(doc1)
@@ -158,6 +180,7 @@ def run(case_dirs, out, settings: Settings = Settings(), log=print, argv=None) -
             q["X_c"] = doc["model1"]["X_c"]
             q["mirrored_steady_X_below_X_c"] = bool("X" in s and -s["X"] < doc["model1"]["X_c"])
             q["dem_X_reversal_max"] = steady["X_reversal_max"]
+            q["dem_X_reversal_bound"] = steady["X_reversal_bound"]
             q["X_c_lower_bound"] = xc_bound[q["route"]]
             q["X_c_at_lower_bound"] = bool(q["X_c"] <= q["X_c_lower_bound"] * (1 + 1e-6))
     for name, fr in (("friction_eq2", r1["friction_eq2"]), ("friction_quadratic", r1["friction_quadratic"])):

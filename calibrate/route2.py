@@ -5,9 +5,12 @@ Method
 Eq. 4 is rate independent (MODEL.md), so a run is replayed in *path strain*:
 each piece of one sign of the shear rate becomes ``model.steady_shear(length,
 sign)`` at unit rate, where time equals path strain, and the model is read at
-the samples' path strains (``t_eval``). The fabric starts from the model's own
-steady state for the pre-shear's direction (``model.steady_state``), so the
-steady plateaus before and after a reversal test the parameters too.
+the samples' path strains (``t_eval``). The fabric starts from the run's own
+DEM state before the reversal (``dem_contract.pre_reversal_state``, the start
+``compare`` uses too): a parameter set that cannot carry every seed through
+its reversal (a start past the pole, a fabric that runs away) scores as
+failed. The plateau the run recovers to, and the steady residuals, test the
+model's own steady state.
 
 Residuals, over every sample of every seed and chosen protocol (raw DEM values,
 not smoothed):
@@ -32,7 +35,8 @@ import numpy as np
 import pandas as pd
 from scipy.optimize import least_squares
 
-from model import PoleError, params_from_dict, simulate, steady_shear, steady_state
+from dem_contract import pre_reversal_state
+from model import PoleError, params_from_dict, simulate, steady_shear
 
 from . import fits
 from .fits import FitResult
@@ -63,6 +67,7 @@ class Replay:
     label: str
     case: str
     sign0: float
+    A0: tuple
     pieces: list
     s: np.ndarray
     g: np.ndarray
@@ -89,7 +94,8 @@ def prepare(cases, samples: pd.DataFrame, settings_backsolve) -> list:
 
     out = []
     for c in cases:
-        g_pre = float(np.sign(np.median(c.preshear.data["gammadot"].to_numpy())))
+        pre = pre_reversal_state(c.preshear.data)
+        g_pre = pre["gammadot_sign"]
         for proto, run in c.runs.items():
             d = run.data
             strain = d["strain"].to_numpy()
@@ -102,7 +108,7 @@ def prepare(cases, samples: pd.DataFrame, settings_backsolve) -> list:
             keep = sm["rate_frac"].to_numpy() >= settings_backsolve.rate_min
             sm = sm[keep]
             out.append(Replay(
-                label=f"{c.name}/{proto}", case=c.name, sign0=g_pre,
+                label=f"{c.name}/{proto}", case=c.name, sign0=g_pre, A0=(pre["A_xx"], pre["A_xy"]),
                 pieces=[(sg, e - b0) for sg, b0, e in segs if e - b0 > 0],
                 s=sm["s"].to_numpy(), g=sm["g"].to_numpy(), a=sm["a_raw"].to_numpy(), b=sm["b_raw"].to_numpy(),
                 mu=(sm["sigma_xy_over_p"] * sm["g"]).to_numpy(),
@@ -124,13 +130,13 @@ def replay_run(params, replay: Replay, model: str, friction: str, settings: Rout
     """Model a, b and signed friction at the replay's samples. Raises PoleError / ValueError.
 
     ``cache`` (a dict) shares one integration between runs with the same
-    history and samples (the seeds of one protocol).
+    start, history and samples.
     """
-    key = (replay.sign0, tuple(np.round([x for pc in replay.pieces for x in pc], 9)), replay.s.tobytes())
+    key = (replay.A0, tuple(np.round([x for pc in replay.pieces for x in pc], 9)), replay.s.tobytes())
     if cache is not None and key in cache:
         m = cache[key]
     else:
-        a0, b0, _ = steady_state(params, model, sign=int(replay.sign0))
+        a0, b0 = replay.A0
         h = history_of(replay)
         t = np.clip(replay.s, 0.0, h.t_end)
         order = np.argsort(t, kind="stable")

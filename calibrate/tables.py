@@ -20,7 +20,8 @@ def _note(value, lo, hi, bounds) -> str:
     for side, b in zip(("lower", "upper"), bounds):
         if np.isfinite(b) and abs(value - b) <= 1e-6 * max(abs(b), 1.0):
             notes.append(f"at its {side} bound {b:.6g} (the constraint, not the data, sets it)")
-    if np.isfinite(lo) and np.isfinite(hi) and not lo <= value <= hi:
+    tol = 1e-6 * max(abs(lo), abs(hi)) if np.isfinite(lo) and np.isfinite(hi) else 0.0
+    if np.isfinite(lo) and np.isfinite(hi) and not lo - tol <= value <= hi + tol:
         notes.append("outside its bootstrap interval (replicates do not scatter about it: poorly identified)")
     return "; ".join(notes)
 

@@ -29,8 +29,8 @@ def test_eq2_fit_recovers_its_parameters_from_signed_samples_on_both_sides_of_X0
 
 
 def test_X_c_lower_bound_lies_beyond_every_state_a_reversal_starts_from():
-    steady = {"X": -0.080, "X_reversal_max": 0.095}
-    assert fits.xc_lower_bound(steady, 0.002) == pytest.approx(0.097)      # the noisiest seed, not the mean
+    steady = {"X": -0.080, "X_reversal_max": 0.090, "X_reversal_bound": 0.095}
+    assert fits.xc_lower_bound(steady, 0.002) == pytest.approx(0.097)      # a new seed's bound, not the mean
     bins = pd.DataFrame({"X_mean": [-0.05, 0.1]})
     assert fits.xc_lower_bound(steady, 0.002, bins) == pytest.approx(0.102)
     assert fits.xc_lower_bound({"X": -0.080}, 0.002) == pytest.approx(0.082)
@@ -46,3 +46,23 @@ def test_parameter_table_notes_values_held_by_a_constraint_or_outside_their_inte
     assert "lower bound 0.097" in note["X_c"]
     assert "outside its bootstrap interval" in note["c1"] and "bound" not in note["c1"]
     assert note["a1"] == ""
+
+
+def test_reversal_start_bound_is_the_student_t_prediction_bound_for_a_new_seed():
+    from calibrate.io import reversal_start_bound
+    assert reversal_start_bound([0.08, 0.09, 0.10]) == pytest.approx(0.09 + 4.302653 * 0.01 * np.sqrt(4 / 3), rel=1e-6)
+    assert reversal_start_bound([0.07]) == 0.07
+    assert reversal_start_bound([0.09, 0.09]) == 0.09      # no spread: the largest seen
+
+
+def test_default_route_is_route_2_unless_route_1_predicts_held_out_seeds_clearly_better():
+    from calibrate.pipeline import choose_route
+
+    def held(back, curves):
+        return pd.DataFrame([{"replicate": k, "route": r, "score": v} for k, (b, c) in enumerate(zip(back, curves))
+                             for r, v in (("backsolve", b), ("curves", c))])
+    ins = {"backsolve": 1.0, "curves": 2.0}
+    assert choose_route(held([1.00, 1.02, 0.99, 1.01], [1.01, 1.00, 1.02, 1.00]), ins) == "curves"   # a tie
+    assert choose_route(held([0.90, 0.91, 0.89, 0.90], [1.00, 1.01, 1.00, 1.02]), ins) == "backsolve"
+    assert choose_route(held([1.5, 1.5, 1.5, 1.5], [1.0, np.inf, 1.0, 1.0]), ins) == "backsolve"   # fewer failures
+    assert choose_route(pd.DataFrame(), ins) == "backsolve"                                        # in-sample
