@@ -11,8 +11,15 @@ from . import backsolve, fits
 
 
 def friction_data(samples, settings):
-    """X and signed friction g sigma_xy/p of the kept samples, and the noise of one sample."""
-    keep = backsolve.select(samples, settings)
+    """X and signed friction g sigma_xy/p of the samples where X is defined.
+
+    The rate rule of the back-solve applies (X = A:D'/|D'| needs a rate), its
+    skip after a reversal does not: the friction law needs no derivative, and
+    the samples just after a reversal are the only ones at the largest X, where
+    Eq. 2's fifth-order branch would otherwise be extrapolated (k5 ran to 8e6
+    on the last bins before X ~ 0.06 without them).
+    """
+    keep = samples["rate_frac"].to_numpy() >= settings.rate_min
     d = samples[keep]
     X = d["X"].to_numpy()
     mu = (d["sigma_xy_over_p"] * d["g"]).to_numpy()
