@@ -58,9 +58,27 @@ class FitResult:
     extra: dict = field(default_factory=dict)
 
 
+#: Residual per unit of alpha2 > 0 at the steady X (a hinge: zero while alpha2 < 0).
+STABILITY_WEIGHT = 1e3
+#: Number of steady residuals every fabric fit appends (a, b, stability).
+N_STEADY = 3
+
+
 def _steady_fabric_residuals(alpha1, alpha2, steady, weight):
+    r"""Steady residuals: the implied steady (a, b) against the DEM's, and a stability hinge.
+
+    With constant coefficients the steady state of Eq. 4 is linearly stable
+    only for :math:`\alpha_2 < 0` (the eigenvalues are
+    :math:`\alpha_2/\sqrt2 \pm i`). A DEM steady fabric with A_xx > 0 (theta_A
+    above 135 deg, which 500-disk ensembles show within their noise) is matched
+    by alphas of flipped sign, alpha1 > 0 and alpha2 > 0: an unstable steady
+    state. The hinge ``STABILITY_WEIGHT * max(0, alpha2)`` keeps the fits on the
+    admissible side, the closest stable steady state to the DEM's.
+    """
     a, b, _ = steady_state_constant(alpha1, alpha2)
-    return weight * np.array([(a - steady["A_xx"]) / steady["se_A_xx"], (b - steady["A_xy"]) / steady["se_A_xy"]])
+    return np.array([weight * (a - steady["A_xx"]) / steady["se_A_xx"],
+                     weight * (b - steady["A_xy"]) / steady["se_A_xy"],
+                     STABILITY_WEIGHT * max(0.0, float(alpha2))])
 
 
 # --------------------------------------------------------------------------- friction
@@ -204,7 +222,7 @@ def fit_model1(bins, steady, steady_weight=1.0, xc_margin=2e-3, x0=None) -> FitR
         if best is None or sol.cost < best.cost:
             best = sol
     vals = dict(zip(M1_KEYS, unpack(best.x).tolist()))
-    return FitResult("model1", vals, float(best.cost), len(b), float(np.sqrt(np.mean(best.fun[:-2] ** 2))),
+    return FitResult("model1", vals, float(best.cost), len(b), float(np.sqrt(np.mean(best.fun[:-N_STEADY] ** 2))),
                      bool(best.success), best.message, {"X_c_lower_bound": xc_lo})
 
 
@@ -230,5 +248,5 @@ def fit_model2(bins, steady, steady_weight=1.0) -> FitResult:
         if best is None or sol.cost < best.cost:
             best = sol
     vals = dict(zip(M2_KEYS, best.x.tolist()))
-    return FitResult("model2", vals, float(best.cost), len(b), float(np.sqrt(np.mean(best.fun[:-2] ** 2))),
+    return FitResult("model2", vals, float(best.cost), len(b), float(np.sqrt(np.mean(best.fun[:-N_STEADY] ** 2))),
                      bool(best.success), best.message)

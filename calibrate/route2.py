@@ -202,7 +202,7 @@ def fit(replays, base_params: dict, model: str, start: dict, steady: dict, sigma
         scale = np.array([1.0, 1.0, 10.0])
         lo = np.full(3, -np.inf)
         hi = np.full(3, np.inf)
-    n_res = sum(3 * len(r.s) for r in replays) + 2
+    n_res = sum(3 * len(r.s) for r in replays) + fits.N_STEADY
     state = {"n": 0, "best": None, "best_cost": np.inf, "fails": 0}
 
     def res(p):
@@ -241,7 +241,7 @@ def fit(replays, base_params: dict, model: str, start: dict, steady: dict, sigma
         message = f"budget of {settings.max_evals} model evaluations used up; best point kept"
     p = state["best"] if state["best"] is not None else x0
     vals = dict(zip(keys, (p * scale).tolist()))
-    n_data = n_res - 2
+    n_data = n_res - fits.N_STEADY
     rms = float(np.sqrt(2 * state["best_cost"] / max(n_res, 1)))
     ok = state["best_cost"] < 0.5 * n_res * PENALTY**2
     return FitResult(model, vals, state["best_cost"], n_data, rms, ok, message, {"evaluations": state["n"], "failed_evaluations": state["fails"]})

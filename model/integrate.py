@@ -100,7 +100,8 @@ def steady_state(params, model="model1", sign=+1):
     form with the alphas taken at X) by bracketing on ``[-1, min(1, X_c))`` and
     ``brentq``; then :math:`a = \alpha_1/(2 + \alpha_2^2)`, :math:`b = -\alpha_2 a/\sqrt2`
     for gammadot > 0. Reversing the shear flips b and keeps a and X. Only
-    linearly stable roots count; if several are stable, the one reached from an
+    linearly stable roots with a physical fabric (|A| <= 1/sqrt(2), the bound of
+    any fabric deviator) count; if several remain, the one reached from an
     isotropic fabric (A = 0) is returned.
     """
     p = as_params(params)
@@ -123,10 +124,11 @@ def steady_state(params, model="model1", sign=+1):
     stable = []
     for X in roots:
         a, b, _ = laws.steady_state_constant(*alphas(float(X)))
-        if _is_stable(alphas, a, b, X_c):
+        if a * a + b * b <= 0.25 and _is_stable(alphas, a, b, X_c):  # physical: |A| <= 1/sqrt(2)
             stable.append((a, b, X))
     if not stable:
-        raise ValueError(f"{model}: no stable steady state of simple shear with X in [-1, {hi:.4g}) for these parameters")
+        raise ValueError(f"{model}: no stable steady state of simple shear with X in [-1, {hi:.4g}) and "
+                         f"|A| <= 1/sqrt(2) for these parameters")
     if len(stable) > 1:
         from .histories import steady_shear
         tab = simulate(p, steady_shear(50.0), model=model, A0=(0.0, 0.0), strain_eval=[50.0], method="Radau")

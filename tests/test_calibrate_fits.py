@@ -66,3 +66,16 @@ def test_default_route_is_route_2_unless_route_1_predicts_held_out_seeds_clearly
     assert choose_route(held([0.90, 0.91, 0.89, 0.90], [1.00, 1.01, 1.00, 1.02]), ins) == "backsolve"
     assert choose_route(held([1.5, 1.5, 1.5, 1.5], [1.0, np.inf, 1.0, 1.0]), ins) == "backsolve"   # fewer failures
     assert choose_route(pd.DataFrame(), ins) == "backsolve"                                        # in-sample
+
+
+def test_fabric_fits_keep_the_steady_state_stable_even_when_the_dem_fabric_leans_past_135_degrees():
+    """A DEM steady fabric with A_xx > 0 is matched exactly only by alpha2 > 0 (unstable); the fit must not go there."""
+    from model.laws import steady_state_constant
+    X = np.linspace(-0.1, 0.05, 12)
+    bins = pd.DataFrame({"X_mean": X, "alpha1": np.full_like(X, 0.3), "alpha2": 2.7 + 0 * X, "se_alpha1": 5.0,
+                         "se_alpha2": 50.0, "cov12": 0.0, "used": True})   # weak bins pulling to the flipped side
+    a, b, Xs = steady_state_constant(0.3, 2.7)                               # a > 0: theta_A above 135 deg
+    steady = {"A_xx": a, "A_xy": b, "X": Xs, "se_A_xx": 1e-4, "se_A_xy": 1e-4}
+    fit = fits.fit_model2(bins, steady)
+    assert fit.values["c2"] + fit.values["c3"] * Xs < 0      # alpha2 at the steady X: a stable steady state
+    assert fits._steady_fabric_residuals(-1.0, -12.0, steady, 1.0)[2] == 0.0

@@ -146,3 +146,15 @@ def test_parameters_that_blow_the_fabric_up_stop_with_a_clear_error_not_nan():
     doc["model2"] = {"c1": -0.3, "c2": 8.0, "c3": 0.0}  # alpha2 > 0: Eq. 4 grows without bound
     with pytest.raises(FabricDivergence, match=r"diverged at t = .*exceeds 1/sqrt\(2\)"):
         simulate(params_from_dict(doc), heaviside(1.0, 5.0), model="model2", A0=(-0.02, -0.05))
+
+
+def test_steady_state_ignores_a_stable_root_with_an_unphysical_fabric():
+    """A fit can leave a stable root at |A| > 1/sqrt(2) (alpha2 ~ 0 near X = 0): it is not a steady state."""
+    from model import params_from_dict, steady_state
+    d = default_params().to_dict()
+    # a Model 1 fit of the quick campaign (2026-11-22) before the stability hinge of calibrate.fits:
+    # its root near the DEM's X = -0.088 is unstable (alpha2 = +2.7), the only stable one has |A| = 1.22
+    d["model1"] = dict(a1=-1.6052157, b1=-21.110877, c1=-3.8e-08, a2=0.17912873, b2=-28.638976, c2=83072.673,
+                       X_c=0.38416035)
+    with pytest.raises(ValueError, match="no stable steady state .*1/sqrt"):
+        steady_state(params_from_dict(d))
