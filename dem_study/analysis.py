@@ -10,7 +10,9 @@ yade_scripts/SCENE.md) and builds:
   against strain since the reversal, on a common strain grid) from the finest,
   and the seed-to-seed spread of the same quantities at the base setting;
 - mu(I): the steady friction against the achieved inertial number with the fit
-  mu = mu_c + b I, and the quasi-static check of the campaign's I.
+  mu = mu_c + b I, and the quasi-static check of the campaign's I;
+- the repeats: axis values run with every seed, their mean steady values
+  against the base seeds' mean, in standard errors (``repeat_table``).
 
 Notes
 -----
@@ -33,7 +35,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from .grid import AXES
+from .grid import AXES, REPEAT_PREFIX
 
 QUANTITIES = ("mu", "A_norm", "theta_A_deg")
 STAGES = ("pack", "preshear", "heaviside")
@@ -181,7 +183,7 @@ def cost_table(points: pd.DataFrame, results: dict[str, PointResult], tolerance:
     base_seeds = points[points["axis"] == "seed"]["point"].tolist()
     spread = seed_spread([results[p] for p in base_seeds])
     rows = []
-    for axis, group in points.groupby("axis", sort=False):
+    for axis, group in points[~points["axis"].str.startswith(REPEAT_PREFIX)].groupby("axis", sort=False):
         if axis == "seed":
             ref = results[group["point"].iloc[0]]
         else:
@@ -209,6 +211,40 @@ def cost_table(points: pd.DataFrame, results: dict[str, PointResult], tolerance:
             out["within_tolerance"] = ok if axis != "seed" else np.nan
             rows.append(out)
     return pd.DataFrame(rows)
+
+
+def repeat_table(points: pd.DataFrame, results: dict[str, PointResult]) -> pd.DataFrame:
+    r"""Repeated axis values (``accuracy.repeat``): their mean over seeds against the base seeds' mean.
+
+    One row per (axis, value, quantity) of the steady mu, |A| and theta_A:
+    ``mean``, ``se`` (standard error over the point's seeds), ``base_mean``,
+    ``base_se``, ``difference`` and ``z`` = difference / sqrt(se^2 + base_se^2),
+    the number of standard errors that separate the setting from the base; a
+    single-run deviation in ``dem_cost.csv`` is only trusted where this is large.
+    """
+    cols = ["axis", "value", "quantity", "n_seeds", "mean", "se", "n_base_seeds", "base_mean", "base_se",
+            "difference", "z"]
+    rep = points[points["axis"].str.startswith(REPEAT_PREFIX)]
+    if rep.empty:
+        return pd.DataFrame(columns=cols)
+    base = [results[p] for p in points.loc[points["axis"] == "seed", "point"]]
+    rows = []
+    for (axis_tag, value), group in rep.groupby(["axis", "value"], sort=False):
+        axis = axis_tag.removeprefix(REPEAT_PREFIX)
+        first = points[(points["axis"] == axis) & np.isclose(points["value"], value)]["point"].tolist()
+        runs = [results[p] for p in first + group["point"].tolist()]
+        for q in QUANTITIES:
+            x = np.array([r.steady[q] for r in runs])
+            y = np.array([r.steady[q] for r in base])
+            se_x = x.std(ddof=1) / np.sqrt(len(x)) if len(x) > 1 else np.nan
+            se_y = y.std(ddof=1) / np.sqrt(len(y)) if len(y) > 1 else np.nan
+            diff = angle_difference(x.mean(), y.mean()) if q == "theta_A_deg" else x.mean() - y.mean()
+            with np.errstate(divide="ignore", invalid="ignore"):   # identical seeds: z is +-inf or NaN
+                z = float(np.divide(diff, np.hypot(se_x, se_y)))
+            rows.append({"axis": axis, "value": float(value), "quantity": q, "n_seeds": len(x), "mean": x.mean(),
+                         "se": se_x, "n_base_seeds": len(y), "base_mean": y.mean(), "base_se": se_y,
+                         "difference": float(diff), "z": z})
+    return pd.DataFrame(rows, columns=cols)
 
 
 def cheapest_within_tolerance(table: pd.DataFrame) -> dict:

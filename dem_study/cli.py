@@ -38,6 +38,8 @@ def analyse(args) -> int:
     mu_table, fit = analysis.mu_of_I_table(points, results, args.campaign_I, args.quasi_static_tolerance)
     mu_table.to_csv(out / "mu_of_I.csv", index=False, float_format="%.6g")
     figures.mu_of_I(mu_table, out / "mu_of_I.png")
+    repeats = analysis.repeat_table(points, results)
+    repeats.to_csv(out / "dem_repeats.csv", index=False, float_format="%.6g")
     camp = mu_table[mu_table["kind"] == "campaign"]
     cheapest = analysis.cheapest_within_tolerance(table)
     summary = {
@@ -49,6 +51,7 @@ def analyse(args) -> int:
         "cheapest_within_tolerance": cheapest,
         "recommended_setting": analysis.recommended_setting(points, cheapest),
         "mu_of_I_fit": vars(fit),
+        "repeats": repeats.to_dict("records"),
         "quasi_static_tolerance": args.quasi_static_tolerance,
         "campaign_quasi_static": {f"{I:g}": {"rel_excess": float(e), "within": bool(w)}
                                   for I, e, w in zip(camp["inertial_number"], camp["rel_excess"],

@@ -41,6 +41,7 @@ FINEST = {
     "coarse_interval": min,
 }
 BASE_LABEL = "base"
+REPEAT_PREFIX = "repeat:"
 
 # Throughput measured on YADE 2023.02a, one thread (DESIGN.md): particle-steps/s
 # at 500 and 5,000 disks; interpolated log-log in N, held constant outside.
@@ -127,7 +128,10 @@ def expand(accuracy: dict) -> pd.DataFrame:
     ``point`` (the case directory name), ``seed``, ``is_base``, ``finest``
     (this row is its axis's reference) and the full setting (one column per axis).
     The base value of every axis is always on that axis (it is the base point);
-    axis points run with the first seed.
+    axis points run with the first seed. An axis value listed in
+    ``accuracy.repeat`` also runs with every other seed, in rows whose axis is
+    ``repeat:<axis>`` (``analysis.repeat_table`` sets their mean against the
+    base seeds').
     """
     base = base_setting(accuracy)
     if accuracy.get("steady_window", 0.5) >= accuracy.get("preshear_strain", 1.5):
@@ -148,6 +152,15 @@ def expand(accuracy: dict) -> pd.DataFrame:
     for seed in seeds:
         rows.append(dict(axis="seed", value=float(seed), seed=seed, is_base=True, finest=False,
                          point=point_label(None, None, seed), **base))
+    grid = active_grid(accuracy)
+    for axis, values in (accuracy.get("repeat") or {}).items():
+        for v in values:
+            if axis not in grid or not any(_same(v, g) for g in grid[axis]) or _same(v, base[axis]):
+                raise ValueError(f"accuracy.repeat.{axis}: {v:g} is not a non-base value of the active grid "
+                                 f"(accuracy.subset = {accuracy.get('subset', 'default')!r})")
+            for seed in seeds[1:]:
+                rows.append(dict(axis=f"{REPEAT_PREFIX}{axis}", value=float(v), seed=seed, is_base=False,
+                                 finest=False, point=point_label(axis, v, seed), **setting_of(base, axis, v)))
     return pd.DataFrame(rows)
 
 

@@ -45,7 +45,8 @@ def test_default_subset_expands_one_factor_at_a_time(paper):
     assert list(seeds["point"]) == [f"base_s{s}" for s in acc["seeds"]]
     points = grid.unique_points(table)
     n_axis_points = sum(len(set(v) - {base[a]}) for a, v in acc["default_subset"].items())
-    assert len(points) == n_axis_points + len(acc["seeds"])
+    n_repeats = sum(len(v) for v in acc.get("repeat", {}).values()) * (len(acc["seeds"]) - 1)
+    assert len(points) == n_axis_points + len(acc["seeds"]) + n_repeats
     assert "kappa-100000_s1" in set(points["point"]) and "H-37_s1" in set(points["point"])
 
 
@@ -101,9 +102,11 @@ def test_cost_model_matches_design_facts():
 
 
 def test_default_subset_takes_about_an_hour_on_two_cores(paper):
-    est = grid.estimate(paper)
+    est = grid.estimate({**paper, "accuracy": {**paper["accuracy"], "repeat": {}}})
     hours = grid.makespan(est["est_core_s"], 2) / 3600
     assert 0.75 < hours < 1.4, hours
+    with_repeats = grid.estimate(paper)
+    assert len(with_repeats) == len(est) + 3 and with_repeats["est_core_s"].sum() > est["est_core_s"].sum()
     full = grid.estimate({**paper, "accuracy": {**paper["accuracy"], "subset": "full"}})
     assert full["est_core_s"].sum() > est["est_core_s"].sum()
 
@@ -292,3 +295,36 @@ def test_angle_differences_wrap_at_180_degrees():
     a, b = A_components(0.1, 170.0)
     norm, theta = analysis.fabric_norm_angle(a, b)
     assert norm == pytest.approx(0.1) and theta == pytest.approx(170.0)
+
+
+# --- repeats: a setting run with every seed -------------------------------------
+
+def test_repeated_value_runs_with_every_seed_and_must_be_on_the_grid():
+    table = grid.expand({**ACC, "repeat": {"kappa": [1e5]}})
+    rep = table[table["axis"] == "repeat:kappa"]
+    assert list(rep["point"]) == ["kappa-100000_s2", "kappa-100000_s3"] and np.allclose(rep["kappa"], 1e5)
+    assert set(table[table["axis"] != "repeat:kappa"]["point"]) == set(KNOWN)      # the rest is unchanged
+    with pytest.raises(ValueError, match=r"accuracy\.repeat\.kappa: 3000"):
+        grid.expand({**ACC, "repeat": {"kappa": [3e3]}})
+    with pytest.raises(ValueError, match=r"accuracy\.repeat\.kappa"):
+        grid.expand({**ACC, "repeat": {"kappa": [1e3]}})                         # the base itself
+
+
+def test_repeat_table_sets_the_mean_over_seeds_against_the_base_seeds(tmp_path):
+    points = grid.expand({**ACC, "repeat": {"kappa": [1e5]}})
+    offsets = {"kappa-100000_s1": 0.019, "kappa-100000_s2": 0.020, "kappa-100000_s3": 0.021}
+    for p, dA in offsets.items():
+        write_case(tmp_path / p, 3e-3, dA=dA)
+    for p in ("base_s1", "base_s2", "base_s3"):
+        write_case(tmp_path / p, 3e-3, **KNOWN[p])
+    edges = analysis.strain_edges(0.2, 0.01)
+    results = {p: analysis.load_point(tmp_path / p, p, 0.5, edges) for p in [*offsets, "base_s1", "base_s2", "base_s3"]}
+    tab = analysis.repeat_table(points, results).set_index("quantity")
+    row = tab.loc["A_norm"]
+    assert row["n_seeds"] == 3 and row["n_base_seeds"] == 3
+    assert row["mean"] == pytest.approx(A0 + 0.020, abs=1e-9) and row["base_mean"] == pytest.approx(A0 + 0.006, abs=1e-9)
+    assert row["difference"] == pytest.approx(0.014, abs=1e-9)
+    assert row["z"] == pytest.approx(0.014 / (0.001 / np.sqrt(3)), rel=1e-6)   # base seeds agree: se 0
+    assert tab.loc["theta_A_deg", "difference"] == pytest.approx(3.0, abs=1e-6)   # base seeds sit at -3 deg
+    # without repeats the table is empty, with its columns
+    assert analysis.repeat_table(grid.expand(ACC), results).empty

@@ -170,6 +170,11 @@ rule dem_study:
             caption="../report/mu_of_I.rst",
             category="Accuracy and cost",
         ),
+        repeats=report(
+            f"{RESULTS}/accuracy/dem_repeats.csv",
+            caption="../report/dem_repeats.rst",
+            category="Accuracy and cost",
+        ),
         summary=f"{RESULTS}/accuracy/dem_study.json",
     params:
         campaign_I=sorted({case["inertial_number"] for case in CASES.values()}),
