@@ -34,14 +34,25 @@ from scipy.optimize import least_squares
 from model.laws import alpha_model1, alpha_model2, friction_quadratic, steady_state_constant, stress_ratio_eq2
 
 SQRT2 = np.sqrt(2.0)
-#: Sign constraints of the fits (MODEL.md's reading): (block, parameter) -> (low, high).
-#: X_c's lower bound depends on the data (``xc_lower_bound``).
-SIGN_BOUNDS = {("friction_eq2", "k5"): (0.0, np.inf), ("model1", "c1"): (-np.inf, 0.0),
-               ("model1", "c2"): (0.0, np.inf)}
 EQ2_KEYS = ("X0", "k1", "k3", "k5")
 QUAD_KEYS = ("m0", "m1", "m2")
 M1_KEYS = ("a1", "b1", "c1", "a2", "b2", "c2", "X_c")
 M2_KEYS = ("c1", "c2", "c3")
+#: Search bounds of Eq. 2 (k5 >= 0: tau keeps falling for X > X0).
+EQ2_BOUNDS = ((-0.5, 0.5), (0.0, 1e3), (-1e6, 1e6), (0.0, 1e12))
+#: Search bounds of Eq. 6 without X_c (c1 <= 0 <= c2, MODEL.md's reading); X_c lies in
+#: [``xc_lower_bound``, ``XC_MAX``]. Routes 1 and 2 both use them (``model1_bounds``).
+M1_BOUNDS = ((-1e3, 1e3), (-1e5, 1e5), (-1e9, 0.0), (-1e3, 1e3), (-1e5, 1e5), (0.0, 1e9))
+XC_MAX = 0.5
+#: The sign constraints among those bounds, (block, parameter) -> (low, high), which a
+#: fitted value may sit on (``tables.params_table`` notes it).
+SIGN_BOUNDS = {("friction_eq2", "k5"): EQ2_BOUNDS[3], ("model1", "c1"): M1_BOUNDS[2], ("model1", "c2"): M1_BOUNDS[5]}
+
+
+def model1_bounds(xc_lo: float):
+    """Lower and upper bounds of the Model 1 parameters (``M1_KEYS`` order), X_c >= ``xc_lo``."""
+    lo, hi = zip(*M1_BOUNDS)
+    return np.array([*lo, xc_lo]), np.array([*hi, XC_MAX])
 
 
 @dataclass
@@ -105,8 +116,7 @@ def fit_eq2(X, mu, sigma_mu, steady, steady_weight=1.0, x0=(0.028, 2.7, 20.0, 9.
         rs = steady_weight * (stress_ratio_eq2(steady["X"], X0, k1, k3, k5) - steady["mu"]) / steady["se_mu"]
         return np.append(r, rs)
 
-    lo = np.array([-0.5, 0.0, -1e6, 0.0]) / scale  # k5 >= 0: tau keeps falling for X > X0
-    hi = np.array([0.5, 1e3, 1e6, 1e12]) / scale
+    lo, hi = (np.array(b) / scale for b in zip(*EQ2_BOUNDS))
     best = None
     for start in (np.array(x0), np.array([0.0, 3.0, 0.0, 0.0]), np.array([0.03, 2.0, 100.0, 1e5])):
         sol = least_squares(res, np.clip(start / scale, lo + 1e-9, hi - 1e-9), bounds=(lo, hi), x_scale="jac")
@@ -202,8 +212,7 @@ def fit_model1(bins, steady, steady_weight=1.0, xc_margin=2e-3, x0=None) -> FitR
         s1, s2 = alpha_model1(steady["X"], a1, b1, c1, a2, b2, c2, Xc)
         return np.concatenate([r, _steady_fabric_residuals(s1, s2, steady, steady_weight)])
 
-    lo = np.array([-1e3, -1e5, -1e9, -1e3, -1e5, 0.0, xc_lo]) / scale
-    hi = np.array([1e3, 1e5, 0.0, 1e3, 1e5, 1e9, 0.5]) / scale
+    lo, hi = (b / scale for b in model1_bounds(xc_lo))
     # linear start from region A
     A = b[b["X_mean"] <= 0]
     if len(A) >= 2:

@@ -196,8 +196,7 @@ def fit(replays, base_params: dict, model: str, start: dict, steady: dict, sigma
     if model == "model1":
         scale = np.array([1.0, 10.0, 1e3, 1.0, 10.0, 1e3, 0.01])
         xl = fits.xc_lower_bound(steady, settings.xc_margin) if x_lower is None else x_lower
-        lo = np.array([-1e3, -1e5, -1e9, -1e3, -1e5, 0.0, xl]) / scale
-        hi = np.array([1e3, 1e5, 0.0, 1e3, 1e5, 1e9, 0.5]) / scale
+        lo, hi = (b / scale for b in fits.model1_bounds(xl))
     else:
         scale = np.array([1.0, 1.0, 10.0])
         lo = np.full(3, -np.inf)
