@@ -66,7 +66,6 @@ class Replay:
 
     label: str
     case: str
-    sign0: float
     A0: tuple
     pieces: list
     s: np.ndarray
@@ -95,7 +94,6 @@ def prepare(cases, samples: pd.DataFrame, settings_backsolve) -> list:
     out = []
     for c in cases:
         pre = pre_reversal_state(c.preshear.data)
-        g_pre = pre["gammadot_sign"]
         for proto, run in c.runs.items():
             d = run.data
             strain = d["strain"].to_numpy()
@@ -108,7 +106,7 @@ def prepare(cases, samples: pd.DataFrame, settings_backsolve) -> list:
             keep = sm["rate_frac"].to_numpy() >= settings_backsolve.rate_min
             sm = sm[keep]
             out.append(Replay(
-                label=f"{c.name}/{proto}", case=c.name, sign0=g_pre, A0=(pre["A_xx"], pre["A_xy"]),
+                label=f"{c.name}/{proto}", case=c.name, A0=(pre["A_xx"], pre["A_xy"]),
                 pieces=[(sg, e - b0) for sg, b0, e in segs if e - b0 > 0],
                 s=sm["s"].to_numpy(), g=sm["g"].to_numpy(), a=sm["a_raw"].to_numpy(), b=sm["b_raw"].to_numpy(),
                 mu=(sm["sigma_xy_over_p"] * sm["g"]).to_numpy(),
