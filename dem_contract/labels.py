@@ -1,0 +1,42 @@
+"""Case labels: the one place that writes and reads the name of a DEM case.
+
+A DEM case is one (pressure, inertial number, seed) of the campaign; its folder
+under ``results/dem/`` is named by its label ``p<pressure>_I<inertial number>_s<seed>``,
+for instance ``p100000_I0.002_s1``. Numbers are written with 6 significant
+digits and no ``+`` in exponents. The seeds of one (pressure, inertial number)
+form an ensemble, named by the label without its ``_s<seed>`` part.
+"""
+from __future__ import annotations
+
+import re
+
+#: A case label, with the ensemble (``p.._I..``) and the seed as groups.
+LABEL_RE = re.compile(r"^(?P<group>p(?P<pressure>[^_/]+)_I(?P<inertial_number>[^_/]+))_s(?P<seed>[0-9]+)$")
+
+
+def format_number(x: float) -> str:
+    """A number as it appears in a label: 6 significant digits, no '+' in the exponent."""
+    return f"{x:.6g}".replace("+", "")
+
+
+def case_label(pressure: float, inertial_number: float, seed: int) -> str:
+    """The label of the case (pressure in Pa, inertial number, seed)."""
+    return f"p{format_number(pressure)}_I{format_number(inertial_number)}_s{int(seed)}"
+
+
+def parse_case_label(label: str) -> dict | None:
+    """The parts of a case label, or None when ``label`` is not one.
+
+    Returns
+    -------
+    dict with ``group`` (the ensemble ``p.._I..``), ``pressure`` and
+    ``inertial_number`` (floats) and ``seed`` (int).
+    """
+    m = LABEL_RE.match(label)
+    if m is None:
+        return None
+    try:
+        pressure, inertial_number = float(m["pressure"]), float(m["inertial_number"])
+    except ValueError:
+        return None
+    return dict(group=m["group"], pressure=pressure, inertial_number=inertial_number, seed=int(m["seed"]))
