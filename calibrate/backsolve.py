@@ -3,7 +3,7 @@ r"""Conditioning-aware back-solve of Eq. 4 for alpha1, alpha2 against X.
 Equations
 ---------
 With :math:`A = [[a, b], [b, -a]]`, path strain :math:`s` (:math:`ds = |\dot\gamma| dt`)
-and :math:`g = \mathrm{sign}\,\dot\gamma`, Eq. 4 in simple shear reads (MODEL.md)
+and :math:`g = \mathrm{sign}\,\dot\gamma`, Eq. 4 in simple shear reads (docs/model.md, Eq. 4)
 
 .. math::
     \frac{da}{ds} = \frac{\alpha_2 a}{\sqrt2} + g b, \qquad

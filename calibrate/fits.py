@@ -2,7 +2,7 @@ r"""Least-squares fits of Eq. 2, the quadratic law of [15], Eq. 6 (Model 1) and 
 
 The laws themselves come from ``model.laws`` (never re-written here). Every fit
 adds *steady-state residuals* so the steady state the parameters imply agrees
-with the DEM's (MODEL.md's closed form with the coefficients taken at the DEM's
+with the DEM's (docs/model.md's closed form of Eq. 4 with the coefficients taken at the DEM's
 steady X):
 
 .. math::
@@ -40,7 +40,7 @@ M1_KEYS = ("a1", "b1", "c1", "a2", "b2", "c2", "X_c")
 M2_KEYS = ("c1", "c2", "c3")
 #: Search bounds of Eq. 2 (k5 >= 0: tau keeps falling for X > X0).
 EQ2_BOUNDS = ((-0.5, 0.5), (0.0, 1e3), (-1e6, 1e6), (0.0, 1e12))
-#: Search bounds of Eq. 6 without X_c (c1 <= 0 <= c2, MODEL.md's reading); X_c lies in
+#: Search bounds of Eq. 6 without X_c (c1 <= 0 <= c2, our reading of Eq. 6, docs/model.md); X_c lies in
 #: [``xc_lower_bound``, ``XC_MAX``]. Routes 1 and 2 both use them (``model1_bounds``).
 M1_BOUNDS = ((-1e3, 1e3), (-1e5, 1e5), (-1e9, 0.0), (-1e3, 1e3), (-1e5, 1e5), (0.0, 1e9))
 XC_MAX = 0.5
@@ -190,7 +190,7 @@ def fit_model1(bins, steady, steady_weight=1.0, xc_margin=2e-3, x0=None) -> FitR
     .. math::
         \alpha_i = a_i + b_i X + [X > 0]\,\frac{c_i X^4}{X_c - X}
 
-    with :math:`c_1 \le 0 \le c_2` (MODEL.md's reading) and
+    with :math:`c_1 \le 0 \le c_2` (our reading of Eq. 6, docs/model.md) and
     :math:`X_c \ge` ``xc_lower_bound``. Several starts; the lowest cost wins.
     Region A (X <= 0) sets a_i, b_i; region B (X > 0) the c_i and X_c.
     """

@@ -1,4 +1,4 @@
-r"""Read and validate the DEM time series (DESIGN.md's contract).
+r"""Read and validate the DEM time series (docs/data-contract.md).
 
 A *case directory* ``results/dem/<case>/`` holds ``preshear.csv``,
 ``heaviside.csv``, ``sinusoidal.csv`` and JSON sidecars. Its name encodes

@@ -2,7 +2,7 @@ r"""Route 2: fit Model 1 / Model 2 to the DEM curves by integrating ``model.simu
 
 Method
 ------
-Eq. 4 is rate independent (MODEL.md), so a run is replayed in *path strain*:
+Eq. 4 is rate independent (docs/model.md, Eq. 4), so a run is replayed in *path strain*:
 each piece of one sign of the shear rate becomes ``model.steady_shear(length,
 sign)`` at unit rate, where time equals path strain, and the model is read at
 the samples' path strains (``t_eval``). The fabric starts from the run's own

@@ -13,8 +13,8 @@ Method (the rule the calibration states)
   ``h = fine_window / (fine_points - 1)`` and apply
   ``scipy.signal.savgol_filter`` (polynomial order ``order``, ``mode="interp"``)
   for the value and the first derivative; read both back at the samples.
-  Two windows: ``fine_window`` strain (default 0.011: 11 points of DESIGN.md's
-  0.001 sampling) for the first ``fine_span`` strain of a piece, where the
+  Two windows: ``fine_window`` strain (default 0.011: 11 points of the quick
+  preset's 0.001 sampling) for the first ``fine_span`` strain of a piece, where the
   fabric changes fast after a reversal, and ``coarse_window`` (default 0.051)
   beyond, where the sampling is coarse (0.01) and the fabric slow.
 * The smoother is linear, so it is built as matrices ``S`` (values) and ``D``

@@ -3,8 +3,8 @@ r"""Synthetic DEM cases for the calibration tests: ``dem_contract.synthetic`` wi
 The calibration is tested on time series that ``model.simulate`` generates from
 known parameters, in exactly the DEM layout (``dem_contract.synthetic`` writes
 them; its docstring states the conventions). The defaults here make them what
-a calibration sees: Gaussian noise of the magnitude DESIGN.md measured on one
-500-disk run (0.04 in mu, 0.0125 in each fabric component per sample), a
+a calibration sees: Gaussian noise of the magnitude measured on one
+500-disk run (0.04 in mu, 0.0125 in each fabric component per sample; docs/data-contract.md), a
 pre-shear of 3 strain from an isotropic fabric (so the transient to steady
 state is in the data and the steady-state check has something to judge), and
 reversal runs of 0.4 strain. Nothing here is a stand-in for the DEM: it is the

@@ -1,6 +1,6 @@
 """Model 1 and Model 2 against the DEM: predictions on each run's own history, errors, claims, figures.
 
-Reads only the DEM time series (DESIGN.md's contract) and the calibration's
+Reads only the DEM time series (docs/data-contract.md) and the calibration's
 ``params.yaml``; uses ``model``'s public API. See ``compare/README.md``.
 """
 from .comparison import Comparison, ensemble_curves, run

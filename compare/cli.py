@@ -120,7 +120,7 @@ def build_parser():
     p.add_argument("--model", default="model1", choices=("model1", "model2"))
     p.add_argument("--seeds", nargs="+", type=int, default=[1, 2, 3, 4])
     p.add_argument("--group", default="p1_I0.001")
-    p.add_argument("--noise", action="store_true", help="add DESIGN.md's one-run noise")
+    p.add_argument("--noise", action="store_true", help="add the noise of one 500-disk DEM run (docs/data-contract.md)")
     p.set_defaults(func=_cmd_synthetic)
     return ap
 

@@ -2,7 +2,7 @@ r"""Reading the DEM time series of one case: the reversal, the fabric before it.
 
 A case is a directory ``<label>/`` with ``preshear.csv`` and one CSV per
 reversal protocol (``heaviside.csv``, ``sinusoidal.csv``), in the column layout
-of DESIGN.md's contract, and optional JSON sidecars ``<stage>.json``. Only the
+of the DEM contract (docs/data-contract.md), and optional JSON sidecars ``<stage>.json``. Only the
 columns in ``USED_COLUMNS`` are read (and must be present); nothing beyond the
 contract is needed. The contract's checks and the error type live in
 ``dem_contract``; the reversal start, A0 and the steady values are this
@@ -11,7 +11,7 @@ package's.
 Conventions
 -----------
 - The reversal starts where the reversal sidecar says (``reversal_t``,
-  ``reversal_strain``, yade_scripts/SCENE.md; rows before it are dropped), or
+  ``reversal_strain``, docs/data-contract.md; rows before it are dropped), or
   at the first sample of the reversal CSV when the sidecar lacks them.
 - The initial fabric ``A0`` is the mean of ``(A_xx, A_xy)`` over the pre-shear
   samples within ``a0_window`` strain of its end (``dem_contract.pre_reversal_state``,
@@ -122,7 +122,7 @@ def load_reversal(case_dir, protocol: str, a0_window: float = A0_WINDOW) -> Reve
     rev = read_series(path, USED_COLUMNS, MIN_SAMPLES, what=f"the {protocol} run of the case")
     meta = read_sidecar(path)
     t_rev = s_rev0 = None
-    if "reversal_t" in meta:   # yade_scripts/SCENE.md: reversal_t, reversal_strain (start of the reversal)
+    if "reversal_t" in meta:   # docs/data-contract.md: reversal_t, reversal_strain (start of the reversal)
         t_rev = float(meta["reversal_t"])
         tol = 1e-9 * max(1.0, abs(t_rev))
         if not (pre["t"].iloc[-1] - tol <= t_rev <= rev["t"].iloc[-1]):

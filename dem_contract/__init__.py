@@ -1,4 +1,4 @@
-"""The DEM time-series contract between ``yade_scripts/`` and the analysis stages (DESIGN.md).
+"""The DEM time-series contract between ``yade_scripts/`` and the analysis stages (docs/data-contract.md).
 
 One CSV per run and stage, a header naming ``CONTRACT_COLUMNS`` (more may
 follow), and an optional JSON sidecar ``<stage>.json``. This package holds what

@@ -1,4 +1,4 @@
-"""Read and check one DEM time series (and its sidecar) of DESIGN.md's contract."""
+"""Read and check one DEM time series (and its sidecar) of the DEM contract (docs/data-contract.md)."""
 from __future__ import annotations
 
 import json
@@ -7,12 +7,12 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-#: The columns every run must carry (DESIGN.md), in order.
+#: The columns every run must carry (docs/data-contract.md), in order.
 CONTRACT_COLUMNS = (
     "t", "strain", "gammadot", "U_top", "U_bottom", "gap", "A_xx", "A_xy", "n_contacts",
     "sigma_xy", "p", "mu", "sigma_xy_bulk", "p_bulk", "phi", "Z", "inertial_number",
 )
-#: The stages that reverse the pre-shear (yade_scripts/SCENE.md).
+#: The stages that reverse the pre-shear (docs/scene.md).
 REVERSAL_PROTOCOLS = ("heaviside", "sinusoidal")
 
 

@@ -8,9 +8,9 @@ known truth the calibration and the comparison are checked against
 (``calibrate.synthetic`` sets the calibration tests' defaults; ``python -m
 compare synthetic`` writes cases from the command line).
 
-Conventions (dimensionless, DESIGN.md): stresses in p (``p = 1``), lengths in
+Conventions (dimensionless, docs/data-contract.md): stresses in p (``p = 1``), lengths in
 d, times in d sqrt(rho/p), so the rate equals the inertial number ``I``.
-Sampling follows DESIGN.md: every ``fine`` strain in the first ``fine_window``
+Sampling follows the DEM's (docs/data-contract.md): every ``fine`` strain in the first ``fine_window``
 after the start of a stage (after the end of the transition for the
 sinusoidal reversal), every ``coarse`` elsewhere.
 
@@ -22,8 +22,8 @@ sinusoidal reversal), every ``coarse`` elsewhere.
   history *is* the table), so a consumer that integrates the same model from
   the same fabric on that table reproduces the series to the integrator's
   tolerance. The sidecars of the reversal runs carry ``reversal_t`` and
-  ``reversal_strain`` (yade_scripts/SCENE.md).
-- Noise (``fabric_noise``, ``mu_noise``; DESIGN.md's magnitude for one
+  ``reversal_strain`` (docs/data-contract.md).
+- Noise (``fabric_noise``, ``mu_noise``; the magnitude measured for one
   500-disk run is ``FABRIC_NOISE``, ``MU_NOISE``) is Gaussian per sample on
   A_xx, A_xy and sigma_xy. With noise the cell also breathes: the gap
   fluctuates by ``GAP_NOISE`` d (so the measured rate, walls over gap,
@@ -43,8 +43,8 @@ from model import simulate, sinusoidal, steady_shear, tabulated
 
 from .series import CONTRACT_COLUMNS, REVERSAL_PROTOCOLS
 
-FABRIC_NOISE = 0.0125   # per sample and fabric component, one 500-disk run (DESIGN.md: 0.01-0.015)
-MU_NOISE = 0.04         # per sample in mu, one 500-disk run (DESIGN.md)
+FABRIC_NOISE = 0.0125   # per sample and fabric component, one 500-disk run (docs/data-contract.md: 0.01-0.015)
+MU_NOISE = 0.04         # per sample in mu, one 500-disk run (docs/data-contract.md)
 GAP = 37.0              # mean gap between the walls, d
 GAP_NOISE = 0.01        # d
 
@@ -135,7 +135,7 @@ def write_case(case_dir, params, seed=1, model="model1", friction="eq2", I=1e-3,
         meta = {"synthetic": True, "generator": "dem_contract.synthetic.write_case", "model": model,
                 "friction": friction, "noise_seed": int(seed), "fabric_noise": fabric_noise,
                 "mu_noise": mu_noise, "inertial_number": I, "stage": name}
-        if name != "preshear":   # as yade_scripts/SCENE.md: the start of the reversal
+        if name != "preshear":   # as docs/data-contract.md: the start of the reversal
             meta.update(reversal_t=t_end, reversal_strain=float(preshear_strain))
         (case_dir / f"{name}.json").write_text(json.dumps(meta, indent=1))
     return case_dir

@@ -2,7 +2,7 @@
 
 Reads the study's points table (``grid.expand``) and each point's series and
 sidecars (``preshear.csv``, ``heaviside.csv``, ``{pack,preshear,heaviside}.json``,
-yade_scripts/SCENE.md) and builds:
+docs/data-contract.md) and builds:
 
 - the cost table: per (axis, value) the wall time, particle-steps per second,
   the steady mu, |A|, theta_A and their deviation from the finest value of

@@ -174,7 +174,7 @@ def unique_points(table: pd.DataFrame) -> pd.DataFrame:
 
 def n_disks(H_over_d: float, W_over_H: float, guess: float = 0.8,
             size_min: float = 0.5, size_max: float = 1.5) -> int:
-    """Grains in the cell, as yade_scripts counts them (SCENE.md, pack.solid_fraction_guess)."""
+    """Grains in the cell, as yade_scripts counts them (docs/scene.md, pack.solid_fraction_guess)."""
     mean_d2 = (size_max**3 - size_min**3) / (3 * (size_max - size_min))
     W = W_over_H * H_over_d
     return round(guess * W * (H_over_d - 1) / (math.pi * mean_d2 / 4))

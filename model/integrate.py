@@ -62,7 +62,7 @@ def as_params(params) -> ModelParams:
 
 
 def _shear_rate_of_strain(alphas, a, b):
-    """d(a, b)/d(strain) in steady simple shear with gammadot > 0 (MODEL.md's component form)."""
+    """d(a, b)/d(strain) in steady simple shear with gammadot > 0 (docs/model.md, Eq. 4 in components)."""
     X = laws.SQRT2 * b
     al1, al2 = alphas(float(X))
     return al2 * a / laws.SQRT2 + b, 0.5 * al1 + al2 * b / laws.SQRT2 - a
@@ -96,7 +96,7 @@ def steady_state(params, model="model1", sign=+1):
 
     Notes
     -----
-    Solves :math:`X = -\alpha_1(X)\alpha_2(X)/(2 + \alpha_2(X)^2)` (MODEL.md's closed
+    Solves :math:`X = -\alpha_1(X)\alpha_2(X)/(2 + \alpha_2(X)^2)` (docs/model.md's closed
     form with the alphas taken at X) by bracketing on ``[-1, min(1, X_c))`` and
     ``brentq``; then :math:`a = \alpha_1/(2 + \alpha_2^2)`, :math:`b = -\alpha_2 a/\sqrt2`
     for gammadot > 0. Reversing the shear flips b and keeps a and X. Only

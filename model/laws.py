@@ -1,4 +1,4 @@
-"""Constitutive laws of the fabric-friction model (see ``shared/MODEL.md``).
+"""Constitutive laws of the fabric-friction model (see ``docs/model.md``).
 
 Pure functions of the scalar state variable ``X = A:D'/|D'|``; they broadcast
 over numpy arrays and know nothing of time integration. They are the single

@@ -176,12 +176,12 @@ def save_params(params: ModelParams, path) -> None:
         yaml.safe_dump(params.to_dict(), fh, sort_keys=False)
 
 
-# Documented defaults: Eq. 2 is OUR READING of MODEL.md; the rest is a plausible
+# Documented defaults: Eq. 2 is our reading of the paper (docs/model.md); the rest is a plausible
 # set chosen by hand (see model/README.md) until calibration writes a real file.
 DEFAULT_PARAMS_YAML = """\
 format: fabric-friction-params
 version: 1
-friction_eq2: {X0: 0.028, k1: 2.7, k3: 20.0, k5: 90000.0}     # MODEL.md, OUR READING
+friction_eq2: {X0: 0.028, k1: 2.7, k3: 20.0, k5: 90000.0}     # docs/model.md, Eq. 2
 friction_quadratic: {m0: 0.0672, m1: -1.29, m2: 24.2}          # least squares to Eq. 2 on X in [-0.075, 0.075]
 model1: {a1: -0.3, b1: 0.0, c1: -200.0, a2: -2.0, b2: 25.0, c2: 1000.0, X_c: 0.0827}
 model2: {c1: -0.3, c2: -2.0, c3: 25.0}                          # same steady state as model1

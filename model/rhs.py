@@ -15,7 +15,7 @@ with :math:`X = A:D'/|D'| = 2 (a d_1 + b d_2)/|D'|`. Model 1 takes the alphas
 from Eq. 6 (``laws.alpha_model1``), Model 2 from Eq. 5 (``laws.alpha_model2``).
 Where :math:`|D'| = 0` the alpha terms vanish whatever X is, so X is not
 needed there. Simple shear (:math:`d_1 = 0`, :math:`d_2 = w = \dot\gamma/2`)
-gives MODEL.md's component form.
+gives the component form of docs/model.md, Eq. 4.
 
 A fabric beyond :math:`|A| = 1/\sqrt 2` (the bound of any contact network)
 raises :class:`FabricDivergence`, so that parameters that make Eq. 4 blow up

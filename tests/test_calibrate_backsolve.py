@@ -15,7 +15,7 @@ def truth_params():
 
 
 def exact_rates(a, b, g, alpha1, alpha2):
-    """d(a, b)/d(path strain) from MODEL.md's component form of Eq. 4."""
+    """d(a, b)/d(path strain) from the component form of Eq. 4 (docs/model.md)."""
     r2 = np.sqrt(2.0)
     return alpha2 * a / r2 + g * b, alpha1 * g / 2 + alpha2 * b / r2 - g * a
 

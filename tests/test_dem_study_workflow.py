@@ -86,7 +86,7 @@ def test_tiny_study_runs_end_to_end_through_snakemake(tmp_path):
     base = cost[(cost["axis"] == "inertial_number") & cost["finest"]].iloc[0]
     assert base["d_mu"] == 0 and base["d_transient_mu"] == 0
     assert 0.1 < base["mu_steady"] < 0.6 and 0 < base["A_norm_steady"] < 0.5
-    assert 90 < base["theta_A_deg_steady"] < 180          # compressive diagonal (MODEL.md)
+    assert 90 < base["theta_A_deg_steady"] < 180          # compressive diagonal (docs/model.md)
     assert cost["seed_spread_mu"].iloc[0] > 0
     mu = pd.read_csv(f"{config['results_dir']}/accuracy/mu_of_I.csv")
     assert (mu["kind"] == "campaign").sum() == 1 and 0.1 < mu["mu_c"].iloc[0] < 0.6

@@ -1,6 +1,6 @@
 """Measurements of one sample, with YADE's C++ helpers where they exist.
 
-Conventions (MODEL.md): tension-positive Cauchy stress, p > 0 in compression,
+Conventions (docs/data-contract.md, docs/model.md): tension-positive Cauchy stress, p > 0 in compression,
 sigma_xy > 0 when the top wall moving towards +x is dragged back.
 A = -I/2 + mean n(x)n over the bulk contacts.
 """

@@ -1,6 +1,6 @@
 """Entry point: yade -n -x yade_scripts/run_stage.py <scene.json> <stage> <case_dir>
 
-Runs one stage (pack, preshear, heaviside, sinusoidal) of one case; see SCENE.md.
+Runs one stage (pack, preshear, heaviside, sinusoidal) of one case; see docs/scene.md.
 Exit codes: 0 done, 1 unexpected error, 2 bad scene or missing input, 3 guard fired.
 """
 import os

@@ -1,4 +1,4 @@
-"""Load and validate a scene file (see SCENE.md). Pure Python: no YADE import.
+"""Load and validate a scene file (see docs/scene.md). Pure Python: no YADE import.
 
 Every key is checked once, here, before anything is built: a missing required
 key, an unknown key, a wrong type or a value out of range raises SceneError
