@@ -31,6 +31,7 @@ from scipy.optimize import brentq
 from . import laws
 from .adaptive import SOLVERS, adaptive_segment
 from .histories import History, ShearSegment
+from .kinematics import double_contraction
 from .params import ModelParams, load_params, params_from_dict
 from .rhs import MODELS, PoleError, coefficient_law, make_rate
 from .rk4 import rk4_segment
@@ -281,7 +282,7 @@ def simulate(params, history: History, model="model1", A0=None, method=DEFAULT_M
         rate = make_rate(s.kin, alphas, X_c)
         d = s.start_direction()
         if d is not None and math.isfinite(X_c):
-            X_start = 2.0 * (y[0] * d[0] + y[1] * d[1])
+            X_start = double_contraction(y[0], y[1], *d)
             if not X_start < X_c:
                 raise PoleError(
                     f"at t = {s.t0:.6g} (strain {history.strain0[i]:.6g}) the shear direction "
@@ -312,7 +313,7 @@ def _xfun(seg):
         n = math.sqrt(2.0 * (d1 * d1 + d2 * d2))
         if n == 0.0:
             return math.nan
-        return 2.0 * (a * d1 + b * d2) / n
+        return double_contraction(a, b, d1, d2) / n
     return xfun
 
 
@@ -340,7 +341,7 @@ def _table(history, p, model, friction, t, Y, seg_idx, seg_dir, X_c):
             n1[m] = np.where(nd > 0, kin[:, 0] / safe, seg_dir[i][0])
             n2[m] = np.where(nd > 0, kin[:, 1] / safe, seg_dir[i][1])
     a, b = Y[:, 0], Y[:, 1]
-    X = 2.0 * (a * n1 + b * n2)
+    X = double_contraction(a, b, n1, n2)
     if math.isfinite(X_c) and np.any(X >= X_c):
         k = int(np.argmax(X >= X_c))
         raise PoleError(f"X = {X[k]:.6g} >= X_c = {X_c:.6g} at t = {t[k]:.6g}: the integration crossed the pole",
