@@ -27,7 +27,7 @@ import pandas as pd
 from model import fabric_angle_deg, fabric_norm, load_params, steady_state
 
 from . import metrics
-from .dem import Reversal, load_reversal
+from .dem import load_reversal
 from .predict import DEFAULT_FRICTION, MODELS, predict
 from .metrics import QUANTITIES, angle_diff
 
@@ -49,7 +49,7 @@ def ensemble_curves(revs, preds):
 
     Parameters
     ----------
-    revs : list of Reversal
+    revs : list of compare.dem.Reversal
         The seeds of one ensemble and protocol.
     preds : dict
         model -> list of Prediction (same order as ``revs``).

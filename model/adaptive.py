@@ -19,8 +19,6 @@ from scipy.integrate import BDF, DOP853, LSODA, RK23, RK45, Radau
 from .rhs import PoleCrossing, PoleError
 
 SOLVERS = {"RK23": RK23, "RK45": RK45, "DOP853": DOP853, "Radau": Radau, "BDF": BDF, "LSODA": LSODA}
-EXPLICIT = ("RK23", "RK45", "DOP853")
-IMPLICIT = ("Radau", "BDF", "LSODA")
 
 
 def adaptive_segment(rate, t0, t1, y0, method, rtol, atol, t_out, X_c=math.inf, xfun=None, max_steps=None):
