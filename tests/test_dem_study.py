@@ -1,6 +1,5 @@
 """The DEM resolution study (dem_study/): grid expansion, scenes, cost estimate, and the
 analysis on constructed series with known deviations and a known linear mu(I)."""
-import itertools
 import json
 import math
 import sys
