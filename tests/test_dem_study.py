@@ -90,8 +90,8 @@ def test_point_scene_changes_one_key_and_passes_the_scene_validator(paper):
         validate(grid.point_scene(paper, point), stage="heaviside")
 
 
-def test_cost_model_matches_the_scene_arithmetic():
-    # 1/(gammadot dt) = sqrt(4 kappa/pi)/(I dt/t_c): ~1.2e5 steps per unit strain at kappa 1e3, I 1e-3, dt 0.3 t_c
+def test_cost_model_matches_design_facts():
+    # sqrt(4 kappa/pi)/(I dt_over_tc): ~1e5 steps per unit strain at kappa 1e3, I 1e-3 with the stable step 0.3; 3e5 at 1e4
     assert grid.steps_per_strain(1e3, 1e-3, 0.3) == pytest.approx(1.19e5, rel=0.01)
     assert grid.steps_per_strain(1e4, 1e-3, 0.3) / grid.steps_per_strain(1e3, 1e-3, 0.3) == pytest.approx(math.sqrt(10))
     assert grid.n_disks(37, 4) == pytest.approx(5000, rel=0.01)
@@ -124,7 +124,7 @@ A0 = 0.12                    # steady |A|
 
 
 def A_components(norm, theta_deg):
-    """a, b of A with |A| = norm and major direction theta: A = |A|/sqrt2 [[cos 2theta, sin 2theta], ...]."""
+    """a, b of A with |A| = norm and major direction theta (docs/model.md)."""
     t = np.radians(2 * np.asarray(theta_deg))
     r = np.asarray(norm) / np.sqrt(2)
     return r * np.cos(t), r * np.sin(t)

@@ -12,7 +12,7 @@ from model.histories import concatenate
 
 
 def constant_coefficient_params(alpha1=-0.3, alpha2=-3.75):
-    """Model 2 with c3 = 0 has constant alphas: the closed form of ``laws.steady_state_constant`` applies."""
+    """Model 2 with c3 = 0 has constant alphas: the closed form of docs/model.md applies."""
     d = default_params().to_dict()
     d["model2"] = {"c1": alpha1, "c2": alpha2, "c3": 0.0}
     return params_from_dict(d)
