@@ -27,7 +27,7 @@ import pandas as pd
 from model import fabric_angle_deg, fabric_norm, load_params, steady_state
 
 from . import metrics
-from .dem import Reversal, load_reversal
+from .dem import load_reversal
 from .predict import DEFAULT_FRICTION, MODELS, predict
 from .metrics import QUANTITIES, angle_diff
 
@@ -49,7 +49,7 @@ def ensemble_curves(revs, preds):
 
     Parameters
     ----------
-    revs : list of Reversal
+    revs : list of compare.dem.Reversal
         The seeds of one ensemble and protocol.
     preds : dict
         model -> list of Prediction (same order as ``revs``).
@@ -157,57 +157,88 @@ def run(case_dirs, params_path, protocols, set_name="all", train_cases=None, tra
         sign = -1 if np.median(revs[0].data["gammadot"].to_numpy()[-5:]) < 0 else 1
         for m in MODELS:
             steady.setdefault((m, sign), model_steady(params, m, friction[m], sign))
+        steady_here = {m: steady[(m, sign)] for m in MODELS}
         for i, r in enumerate(revs):
-            d = r.data
-            pred_rows.append(pd.DataFrame(dict(set=set_name, case=r.label, group=r.group, seed=r.seed,
-                                               protocol=protocol, source="dem", s_rev=d["s_rev"],
-                                               strain=d["strain"], A_xx=d["A_xx"], A_xy=d["A_xy"],
-                                               A_norm=d["A_norm"], theta_A=d["theta_A"], mu=d["mu"])))
             base = dict(set=set_name, level="seed", case=r.label, group=r.group, protocol=protocol,
                         in_sample=r.label in train_cases and protocol in train_protocols)
-            claim_rows.append(_claims_row(base, "dem", d["s_rev"].to_numpy(), d["A_xx"].to_numpy(),
-                                          d["A_xy"].to_numpy(), d["mu"].to_numpy(), r.steady_A, r.steady_mu,
-                                          dem_smooth))
-            for m in MODELS:
-                p = preds[m][i]
-                row = dict(base, model=m, friction=p.friction, status=p.status, rate_smoothing=p.rate_smoothing,
-                           strain_mismatch=p.strain_mismatch, n_samples=len(d))
-                if p.table is not None:
-                    row.update(metrics.errors(d, p.table))
-                    t = p.table
-                    pred_rows.append(pd.DataFrame(dict(set=set_name, case=r.label, group=r.group, seed=r.seed,
-                                                       protocol=protocol, source=m, s_rev=t["s_rev"],
-                                                       strain=t["strain"], A_xx=t["A_xx"], A_xy=t["A_xy"],
-                                                       A_norm=t["A_norm"], theta_A=t["theta_A"], mu=t["mu"])))
-                    claim_rows.append(_claims_row(base, m, t["s_rev"].to_numpy(), t["A_xx"].to_numpy(),
-                                                  t["A_xy"].to_numpy(), t["mu"].to_numpy(), *steady[(m, sign)], 1))
-                else:
-                    claim_rows.append(dict(base, source=m, status=p.status))
-                err_rows.append(row)
+            curves, errors, claims = _seed_rows(r, {m: preds[m][i] for m in MODELS}, base, steady_here, dem_smooth)
+            pred_rows += curves
+            err_rows += errors
+            claim_rows += claims
         for group in dict.fromkeys(r.group for r in revs):
             idx = [i for i, r in enumerate(revs) if r.group == group]
             grevs = [revs[i] for i in idx]
-            ens = ensemble_curves(grevs, {m: [preds[m][i] for i in idx] for m in MODELS})
-            ensembles[(group, protocol)] = ens
             base = dict(set=set_name, level="ensemble", case=group, group=group, protocol=protocol,
                         in_sample=all(r.label in train_cases for r in grevs) and protocol in train_protocols)
-            s = ens["s_rev"].to_numpy()
-            A0 = np.mean([r.A0 for r in grevs], axis=0)
-            claim_rows.append(_claims_row(base, "dem", s, ens["dem_A_xx"].to_numpy(), ens["dem_A_xy"].to_numpy(),
-                                          ens["dem_mu"].to_numpy(), float(fabric_norm(*A0)),
-                                          float(np.mean([r.steady_mu for r in grevs])), dem_smooth))
-            dem = {q: ens[f"dem_{q}"].to_numpy() for q in QUANTITIES}
-            for m in MODELS:
-                n_ok = ens.attrs["n_ok"][m]
-                status = "ok" if n_ok == len(grevs) else f"{len(grevs) - n_ok} of {len(grevs)} seeds failed"
-                row = dict(base, model=m, friction=friction[m], status=status, n_samples=len(ens))
-                claim = dict(base, source=m, status=status)
-                if n_ok:
-                    row.update(metrics.errors(dem, {q: ens[f"{m}_{q}"].to_numpy() for q in QUANTITIES}))
-                    claim = _claims_row(base, m, s, ens[f"{m}_A_xx"].to_numpy(), ens[f"{m}_A_xy"].to_numpy(),
-                                        ens[f"{m}_mu"].to_numpy(), *steady[(m, sign)], 1)
-                    claim["status"] = status
-                err_rows.append(row)
-                claim_rows.append(claim)
+            ens, errors, claims = _ensemble_rows(grevs, {m: [preds[m][i] for i in idx] for m in MODELS}, base,
+                                                 steady_here, friction, dem_smooth)
+            ensembles[(group, protocol)] = ens
+            err_rows += errors
+            claim_rows += claims
     return Comparison(predictions=pd.concat(pred_rows, ignore_index=True), errors=pd.DataFrame(err_rows),
                       claims=pd.DataFrame(claim_rows), ensembles=ensembles)
+
+
+CURVE_COLUMNS = ("s_rev", "strain", "A_xx", "A_xy", "A_norm", "theta_A", "mu")
+
+
+def _curve_frame(base, r, source, table):
+    """Rows of ``predictions.csv``: one curve (the DEM's or a model's) of one run."""
+    return pd.DataFrame(dict(set=base["set"], case=r.label, group=r.group, seed=r.seed, protocol=base["protocol"],
+                             source=source, **{c: table[c] for c in CURVE_COLUMNS}))
+
+
+def _curve_arrays(table):
+    """``s_rev, A_xx, A_xy, mu`` of a curve, as ``metrics.claims`` takes them."""
+    return tuple(table[c].to_numpy() for c in ("s_rev", "A_xx", "A_xy", "mu"))
+
+
+def _seed_rows(r, preds, base, steady, dem_smooth):
+    """Curves, error rows and claim rows of one DEM run and its predictions (``preds``: model -> Prediction).
+
+    ``steady``: model -> (|A|, mu) of the model's own steady state, the reference of its claims.
+    """
+    d = r.data
+    curves = [_curve_frame(base, r, "dem", d)]
+    claims = [_claims_row(base, "dem", *_curve_arrays(d), r.steady_A, r.steady_mu, dem_smooth)]
+    errors = []
+    for m, p in preds.items():
+        row = dict(base, model=m, friction=p.friction, status=p.status, rate_smoothing=p.rate_smoothing,
+                   strain_mismatch=p.strain_mismatch, n_samples=len(d))
+        if p.table is not None:
+            row.update(metrics.errors(d, p.table))
+            curves.append(_curve_frame(base, r, m, p.table))
+            claims.append(_claims_row(base, m, *_curve_arrays(p.table), *steady[m], 1))
+        else:
+            claims.append(dict(base, source=m, status=p.status))
+        errors.append(row)
+    return curves, errors, claims
+
+
+def _ensemble_rows(grevs, gpreds, base, steady, friction, dem_smooth):
+    """Seed-averaged curves of one ensemble and protocol, with their error and claim rows.
+
+    The DEM's claims are measured against the ensemble's pre-reversal |A| and steady mu;
+    a model's status says how many seeds failed.
+    """
+    ens = ensemble_curves(grevs, gpreds)
+    s = ens["s_rev"].to_numpy()
+    A0 = np.mean([r.A0 for r in grevs], axis=0)
+    claims = [_claims_row(base, "dem", s, ens["dem_A_xx"].to_numpy(), ens["dem_A_xy"].to_numpy(),
+                          ens["dem_mu"].to_numpy(), float(fabric_norm(*A0)),
+                          float(np.mean([r.steady_mu for r in grevs])), dem_smooth)]
+    dem = {q: ens[f"dem_{q}"].to_numpy() for q in QUANTITIES}
+    errors = []
+    for m in MODELS:
+        n_ok = ens.attrs["n_ok"][m]
+        status = "ok" if n_ok == len(grevs) else f"{len(grevs) - n_ok} of {len(grevs)} seeds failed"
+        row = dict(base, model=m, friction=friction[m], status=status, n_samples=len(ens))
+        claim = dict(base, source=m, status=status)
+        if n_ok:
+            row.update(metrics.errors(dem, {q: ens[f"{m}_{q}"].to_numpy() for q in QUANTITIES}))
+            claim = _claims_row(base, m, s, ens[f"{m}_A_xx"].to_numpy(), ens[f"{m}_A_xy"].to_numpy(),
+                                ens[f"{m}_mu"].to_numpy(), *steady[m], 1)
+            claim["status"] = status
+        errors.append(row)
+        claims.append(claim)
+    return ens, errors, claims

@@ -74,63 +74,88 @@ def run(case_dirs, params_path, protocols, figure_path, set_name="all", fraction
         dem = rev.data
         for model in MODELS:
             nominal = predict(rev, params, model, friction[model])
-            n += 1
             base = dict(set=set_name, case=rev.label, protocol=protocol, model=model)
-            if nominal.table is None:
-                rows.append(dict(base, parameter="(fitted)", kind="nominal", status=nominal.status))
-            else:
-                rows.append(dict(base, parameter="(fitted)", kind="nominal", status="ok",
-                                 theta_passage=metrics.theta_passage(nominal.table["theta_A"]),
-                                 **{f"rmse_{q}": metrics.errors(dem, nominal.table)[f"rmse_{q}"] for q in QUANTITIES}))
-            curves = {}
-            for key, kind, env, value in perturbations(params, model, fractions):
-                row = dict(base, parameter=key, kind=kind, fitted=params.to_dict()[model][key], value=value)
-                if value == row["fitted"] and env != "interval":
-                    rows.append(dict(row, status="skipped: fitted value is 0, a relative change is no change"))
-                    continue
-                d = params.to_dict()
-                d[model][key] = float(value)
-                try:
-                    p = params_from_dict(d, source=f"{params_path} with {model}.{key} = {value:.6g}")
-                except ValueError as exc:
-                    rows.append(dict(row, status=f"invalid: {exc}"))
-                    curves.setdefault(env, []).append(None)
-                    continue
-                pred = predict(rev, p, model, friction[model])
-                n += 1
-                curves.setdefault(env, []).append(pred.table)
-                if pred.table is None:
-                    rows.append(dict(row, status=pred.status))
-                    continue
-                row["status"] = "ok"
-                if nominal.table is not None:
-                    for q in QUANTITIES:
-                        diff = pred.table[q].to_numpy() - nominal.table[q].to_numpy()
-                        if q == "theta_A":
-                            diff = angle_diff(pred.table[q], nominal.table[q])
-                        row[f"dmax_{q}"] = float(np.max(np.abs(diff)))
-                row.update({f"rmse_{q}": v for q, v in
-                            ((q, metrics.errors(dem, pred.table)[f"rmse_{q}"]) for q in QUANTITIES)})
-                row["theta_passage"] = metrics.theta_passage(pred.table["theta_A"])
-                rows.append(row)
-            envelopes = {}
-            for env in ("interval", "5%", "1%"):
-                tabs = curves.get(env, [])
-                ok = [t for t in tabs if t is not None]
-                if not tabs:
-                    continue
-                lo, hi = {}, {}
-                if ok:
-                    for q in QUANTITIES:
-                        if q == "theta_A" and nominal.table is not None:
-                            ref = nominal.table[q].to_numpy()
-                            dev = np.array([angle_diff(t[q], ref) for t in ok])
-                            lo[q], hi[q] = ref + dev.min(axis=0), ref + dev.max(axis=0)
-                        else:
-                            arr = np.array([t[q].to_numpy() for t in ok])
-                            lo[q], hi[q] = arr.min(axis=0), arr.max(axis=0)
-                envelopes[env] = (lo, hi, len(tabs), len(tabs) - len(ok))
+            rows.append(_nominal_row(base, nominal, dem))
+            perturbed, curves, n_runs = _perturbed_rows(base, rev, params, params_path, model, friction[model],
+                                                        fractions, nominal)
+            rows += perturbed
+            n += 1 + n_runs
             bands[(protocol, model)] = dict(s_rev=dem["s_rev"].to_numpy(), dem=dem, case=rev.label,
-                                            nominal=nominal.table, envelopes=envelopes)
+                                            nominal=nominal.table, envelopes=_envelopes(curves, nominal))
     sensitivity_figure(bands, figure_path)
     return pd.DataFrame(rows), n
+
+
+def _nominal_row(base, nominal, dem):
+    """The row of the fitted parameters: status, theta_A's passage and RMSE against the DEM."""
+    if nominal.table is None:
+        return dict(base, parameter="(fitted)", kind="nominal", status=nominal.status)
+    return dict(base, parameter="(fitted)", kind="nominal", status="ok",
+                theta_passage=metrics.theta_passage(nominal.table["theta_A"]),
+                **{f"rmse_{q}": metrics.errors(dem, nominal.table)[f"rmse_{q}"] for q in QUANTITIES})
+
+
+def _perturbed_rows(base, rev, params, params_path, model, friction, fractions, nominal):
+    """One row per perturbation of ``model``'s coefficients (see ``perturbations``).
+
+    Returns the rows, the perturbed curves per envelope (None for an invalid
+    parameter set or a failed run) and the number of integrations.
+    """
+    rows, curves, n = [], {}, 0
+    for key, kind, env, value in perturbations(params, model, fractions):
+        row = dict(base, parameter=key, kind=kind, fitted=params.to_dict()[model][key], value=value)
+        if value == row["fitted"] and env != "interval":
+            rows.append(dict(row, status="skipped: fitted value is 0, a relative change is no change"))
+            continue
+        d = params.to_dict()
+        d[model][key] = float(value)
+        try:
+            p = params_from_dict(d, source=f"{params_path} with {model}.{key} = {value:.6g}")
+        except ValueError as exc:
+            rows.append(dict(row, status=f"invalid: {exc}"))
+            curves.setdefault(env, []).append(None)
+            continue
+        pred = predict(rev, p, model, friction)
+        n += 1
+        curves.setdefault(env, []).append(pred.table)
+        if pred.table is None:
+            rows.append(dict(row, status=pred.status))
+            continue
+        rows.append(_change_row(row, pred.table, nominal.table, rev.data))
+    return rows, curves, n
+
+
+def _change_row(row, table, nominal_table, dem):
+    """``row`` with status ok, the largest change from the fitted curve, the RMSE against the DEM and theta's passage."""
+    row["status"] = "ok"
+    if nominal_table is not None:
+        for q in QUANTITIES:
+            diff = table[q].to_numpy() - nominal_table[q].to_numpy()
+            if q == "theta_A":
+                diff = angle_diff(table[q], nominal_table[q])
+            row[f"dmax_{q}"] = float(np.max(np.abs(diff)))
+    row.update({f"rmse_{q}": v for q, v in ((q, metrics.errors(dem, table)[f"rmse_{q}"]) for q in QUANTITIES)})
+    row["theta_passage"] = metrics.theta_passage(table["theta_A"])
+    return row
+
+
+def _envelopes(curves, nominal):
+    """Per envelope: (lower curves, upper curves, runs, failed runs); theta_A spread about the fitted curve."""
+    envelopes = {}
+    for env in ("interval", "5%", "1%"):
+        tabs = curves.get(env, [])
+        ok = [t for t in tabs if t is not None]
+        if not tabs:
+            continue
+        lo, hi = {}, {}
+        if ok:
+            for q in QUANTITIES:
+                if q == "theta_A" and nominal.table is not None:
+                    ref = nominal.table[q].to_numpy()
+                    dev = np.array([angle_diff(t[q], ref) for t in ok])
+                    lo[q], hi[q] = ref + dev.min(axis=0), ref + dev.max(axis=0)
+                else:
+                    arr = np.array([t[q].to_numpy() for t in ok])
+                    lo[q], hi[q] = arr.min(axis=0), arr.max(axis=0)
+        envelopes[env] = (lo, hi, len(tabs), len(tabs) - len(ok))
+    return envelopes

@@ -19,8 +19,6 @@ from scipy.integrate import BDF, DOP853, LSODA, RK23, RK45, Radau
 from .rhs import PoleCrossing, PoleError
 
 SOLVERS = {"RK23": RK23, "RK45": RK45, "DOP853": DOP853, "Radau": Radau, "BDF": BDF, "LSODA": LSODA}
-EXPLICIT = ("RK23", "RK45", "DOP853")
-IMPLICIT = ("Radau", "BDF", "LSODA")
 
 
 def adaptive_segment(rate, t0, t1, y0, method, rtol, atol, t_out, X_c=math.inf, xfun=None, max_steps=None):
@@ -58,21 +56,10 @@ def adaptive_segment(rate, t0, t1, y0, method, rtol, atol, t_out, X_c=math.inf, 
         return np.array(rate(t, y[0], y[1]))
 
     def fail(t, y, why):
-        X = xfun(t, y[0], y[1]) if xfun else math.nan
-        raise PoleError(
-            f"{method}: {why} at t = {t:.6g}, X = {X:.6g}, X_c = {X_c:.6g}; the approach to the "
-            "pole is not resolvable (check the parameters: c1/sqrt2 + c2 X_c < 0 makes it repulsive)",
-            t=t, X=X, X_c=X_c,
-        )
+        return _pole_error(method, why, t, y, X_c, xfun)
 
     def start(t, y, first_step):
-        while True:
-            try:
-                return cls(fun, t, y, t1, rtol=rtol, atol=atol, first_step=first_step)
-            except PoleCrossing:
-                first_step = (first_step or 1e-3 * (t1 - t)) / 4.0
-                if first_step < h_min:
-                    fail(t, y, "the right-hand side is undefined at the start")
+        return _start(cls, fun, t, y, t1, rtol, atol, first_step, h_min, fail)
 
     Y = np.empty((len(t_out), 2))
     j = 0
@@ -84,9 +71,7 @@ def adaptive_segment(rate, t0, t1, y0, method, rtol, atol, t_out, X_c=math.inf, 
     while solver.status == "running":
         steps += 1
         if max_steps is not None and steps > max_steps:
-            raise RuntimeError(f"{method} needed more than {max_steps} steps by t = {solver.t:.6g} "
-                               f"(of {t1:.6g}): the problem is stiff here; an implicit method (Radau, BDF, "
-                               "LSODA) handles it")
+            raise _budget_error(method, max_steps, solver.t, t1)
         t_prev, y_prev = solver.t, solver.y.copy()
         try:
             message = solver.step()
@@ -96,21 +81,51 @@ def adaptive_segment(rate, t0, t1, y0, method, rtol, atol, t_out, X_c=math.inf, 
             h = getattr(solver, "h_abs", None) or solver.step_size or 1e-3 * span
             h = min(h, t1 - t_prev) / 4.0
             if h < h_min:
-                fail(t_prev, y_prev, "the step needed to stay below the pole vanished")
+                raise fail(t_prev, y_prev, "the step needed to stay below the pole vanished")
             solver = start(t_prev, y_prev, h)
             continue
         if solver.status == "failed":
             raise RuntimeError(f"{method} failed at t = {solver.t:.6g}: {message}")
-        if j < len(t_out) and t_out[j] <= solver.t:
-            dense = None
-            while j < len(t_out) and t_out[j] <= solver.t:
-                if t_out[j] == solver.t:
-                    Y[j] = solver.y
-                else:
-                    dense = dense or solver.dense_output()
-                    Y[j] = dense(t_out[j])
-                j += 1
-    while j < len(t_out):  # round-off at t1
-        Y[j] = solver.y
-        j += 1
+        j = _report(solver, t_out, Y, j)
+    Y[j:] = solver.y  # round-off at t1
     return Y, solver.y.copy(), nfev[0]
+
+
+def _start(cls, fun, t, y, t1, rtol, atol, first_step, h_min, fail):
+    """Build the solver at ``(t, y)``, shrinking ``first_step`` by 4 while its first evaluations cross X_c."""
+    while True:
+        try:
+            return cls(fun, t, y, t1, rtol=rtol, atol=atol, first_step=first_step)
+        except PoleCrossing:
+            first_step = (first_step or 1e-3 * (t1 - t)) / 4.0
+            if first_step < h_min:
+                raise fail(t, y, "the right-hand side is undefined at the start")
+
+
+def _report(solver, t_out, Y, j):
+    """Fill ``Y`` at the report times ``t_out[j:]`` the last accepted step covered; return the next index."""
+    dense = None
+    while j < len(t_out) and t_out[j] <= solver.t:
+        if t_out[j] == solver.t:
+            Y[j] = solver.y
+        else:
+            dense = dense or solver.dense_output()
+            Y[j] = dense(t_out[j])
+        j += 1
+    return j
+
+
+def _pole_error(method, why, t, y, X_c, xfun):
+    """The ``PoleError`` for an approach to X_c that no step resolves."""
+    X = xfun(t, y[0], y[1]) if xfun else math.nan
+    return PoleError(
+        f"{method}: {why} at t = {t:.6g}, X = {X:.6g}, X_c = {X_c:.6g}; the approach to the "
+        "pole is not resolvable (check the parameters: c1/sqrt2 + c2 X_c < 0 makes it repulsive)",
+        t=t, X=X, X_c=X_c,
+    )
+
+
+def _budget_error(method, max_steps, t, t1):
+    return RuntimeError(f"{method} needed more than {max_steps} steps by t = {t:.6g} "
+                        f"(of {t1:.6g}): the problem is stiff here; an implicit method (Radau, BDF, "
+                        "LSODA) handles it")

@@ -201,9 +201,8 @@ class RotatedSegment(Segment):
 
     def kin(self, t: float):
         d1, d2, w = self.base.kin(self.base.t0 + (t - self.t0))
-        phi = self.phi0 + self.omega * (t - self.t0)
-        c, s = math.cos(2.0 * phi), math.sin(2.0 * phi)
-        return d1 * c - d2 * s, d1 * s + d2 * c, w - self.omega
+        r1, r2 = rotate_deviator(d1, d2, self.phi0 + self.omega * (t - self.t0))
+        return r1, r2, w - self.omega
 
     def strain(self, t):
         # |D'| is invariant; the sign convention (sign of D'_xy) is not, so integrate.

@@ -31,6 +31,7 @@ from scipy.optimize import brentq
 from . import laws
 from .adaptive import SOLVERS, adaptive_segment
 from .histories import History, ShearSegment
+from .kinematics import double_contraction
 from .params import ModelParams, load_params, params_from_dict
 from .rhs import MODELS, PoleError, coefficient_law, make_rate
 from .rk4 import rk4_segment
@@ -251,9 +252,17 @@ def simulate(params, history: History, model="model1", A0=None, method=DEFAULT_M
     if not isinstance(history, History):
         raise ValueError(f"history must be a model.History, got {type(history).__name__}")
     alphas, X_c = coefficient_law(p, model)
-    segs = history.segments
+    seg_dir = _segment_directions(history.segments)
+    y = _initial_fabric(p, model, A0, seg_dir[0])
+    if method == "RK4" and step is None:
+        step = _default_rk4_step(history)
+    times = _report_times(history, t_eval, strain_eval, points_per_strain)
+    t, Y, seg_idx = _integrate_segments(history, alphas, X_c, y, times, method, rtol, atol, step, max_steps)
+    return _table(history, p, model, friction, t, Y, seg_idx, seg_dir, X_c)
 
-    # direction of D' per segment, with rests inheriting the last defined one
+
+def _segment_directions(segs):
+    """Direction of D' per segment, a rest inheriting the last defined one (the first one, at the start)."""
     dirs = [s.direction() for s in segs]
     defined = [d for d in dirs if d is not None]
     last = defined[0] if defined else (0.0, 1.0 / laws.SQRT2)
@@ -261,49 +270,61 @@ def simulate(params, history: History, model="model1", A0=None, method=DEFAULT_M
     for d in dirs:
         last = d if d is not None else last
         seg_dir.append(last)
+    return seg_dir
 
+
+def _initial_fabric(p, model, A0, first_direction):
+    """``A0`` checked, or the steady state for the sign of the first shear (of D'_xy in ``first_direction``)."""
     if A0 is None:
-        first = defined[0] if defined else (0.0, 1.0)
-        a, b, _ = steady_state(p, model, sign=-1 if first[1] < 0 else +1)
-        y = np.array([a, b])
-    else:
-        y = np.asarray(A0, dtype=float).ravel()
-        if y.shape != (2,) or not np.all(np.isfinite(y)):
-            raise ValueError(f"A0 = {A0!r} must be two finite numbers (A_xx, A_xy)")
+        a, b, _ = steady_state(p, model, sign=-1 if first_direction[1] < 0 else +1)
+        return np.array([a, b])
+    y = np.asarray(A0, dtype=float).ravel()
+    if y.shape != (2,) or not np.all(np.isfinite(y)):
+        raise ValueError(f"A0 = {A0!r} must be two finite numbers (A_xx, A_xy)")
+    return y
 
-    if method == "RK4" and step is None:
-        g_max = max(float(np.max(np.abs(s.gammadot(np.linspace(s.t0, s.t1, 17))))) for s in segs)
-        step = DEFAULT_RK4_STRAIN_STEP / g_max if g_max > 0 else history.t_end / 100.0
 
-    times = _report_times(history, t_eval, strain_eval, points_per_strain)
+def _default_rk4_step(history):
+    """``DEFAULT_RK4_STRAIN_STEP`` units of strain at the largest rate of the history."""
+    g_max = max(float(np.max(np.abs(s.gammadot(np.linspace(s.t0, s.t1, 17))))) for s in history.segments)
+    return DEFAULT_RK4_STRAIN_STEP / g_max if g_max > 0 else history.t_end / 100.0
+
+
+def _integrate_segments(history, alphas, X_c, y, times, method, rtol, atol, step, max_steps):
+    """Integrate segment by segment from the fabric ``y``; return report times, states and segment indices."""
     rows_t, rows_Y, rows_seg = [], [], []
-    for i, s in enumerate(segs):
+    for i, s in enumerate(history.segments):
         rate = make_rate(s.kin, alphas, X_c)
-        d = s.start_direction()
-        if d is not None and math.isfinite(X_c):
-            X_start = 2.0 * (y[0] * d[0] + y[1] * d[1])
-            if not X_start < X_c:
-                raise PoleError(
-                    f"at t = {s.t0:.6g} (strain {history.strain0[i]:.6g}) the shear direction "
-                    f"changes and X starts at {X_start:.6g} >= X_c = {X_c:.6g}: Model 1 is undefined "
-                    "there (a reversal mirrors X to -X); this input is outside the model",
-                    t=s.t0, X=X_start, X_c=X_c,
-                )
+        _check_start_below_pole(history, i, y, X_c)
         t_out = np.asarray(times[i], dtype=float)
         if method == "RK4":
             Y, y1 = rk4_segment(rate, s.t0, s.t1, y, step, t_out, X_c)
         else:
-            xfun = _xfun(s)
-            Y, y1, _ = adaptive_segment(rate, s.t0, s.t1, y, method, rtol, atol, t_out, X_c, xfun,
-                                           max_steps=max_steps)
+            Y, y1, _ = adaptive_segment(rate, s.t0, s.t1, y, method, rtol, atol, t_out, X_c, _xfun(s),
+                                        max_steps=max_steps)
         y = np.asarray(y1, dtype=float)
         rows_t.append(t_out)
         rows_Y.append(Y)
         rows_seg.append(np.full(len(t_out), i))
     t = np.concatenate(rows_t)
     Y = np.concatenate(rows_Y) if rows_Y else np.empty((0, 2))
-    seg_idx = np.concatenate(rows_seg).astype(int)
-    return _table(history, p, model, friction, t, Y, seg_idx, seg_dir, X_c)
+    return t, Y, np.concatenate(rows_seg).astype(int)
+
+
+def _check_start_below_pole(history, i, y, X_c):
+    """Raise ``PoleError`` if segment ``i`` starts (a reversal mirrors X to -X) at or beyond X_c."""
+    s = history.segments[i]
+    d = s.start_direction()
+    if d is None or not math.isfinite(X_c):
+        return
+    X_start = double_contraction(y[0], y[1], *d)
+    if not X_start < X_c:
+        raise PoleError(
+            f"at t = {s.t0:.6g} (strain {history.strain0[i]:.6g}) the shear direction "
+            f"changes and X starts at {X_start:.6g} >= X_c = {X_c:.6g}: Model 1 is undefined "
+            "there (a reversal mirrors X to -X); this input is outside the model",
+            t=s.t0, X=X_start, X_c=X_c,
+        )
 
 
 def _xfun(seg):
@@ -312,7 +333,7 @@ def _xfun(seg):
         n = math.sqrt(2.0 * (d1 * d1 + d2 * d2))
         if n == 0.0:
             return math.nan
-        return 2.0 * (a * d1 + b * d2) / n
+        return double_contraction(a, b, d1, d2) / n
     return xfun
 
 
@@ -340,7 +361,7 @@ def _table(history, p, model, friction, t, Y, seg_idx, seg_dir, X_c):
             n1[m] = np.where(nd > 0, kin[:, 0] / safe, seg_dir[i][0])
             n2[m] = np.where(nd > 0, kin[:, 1] / safe, seg_dir[i][1])
     a, b = Y[:, 0], Y[:, 1]
-    X = 2.0 * (a * n1 + b * n2)
+    X = double_contraction(a, b, n1, n2)
     if math.isfinite(X_c) and np.any(X >= X_c):
         k = int(np.argmax(X >= X_c))
         raise PoleError(f"X = {X[k]:.6g} >= X_c = {X_c:.6g} at t = {t[k]:.6g}: the integration crossed the pole",

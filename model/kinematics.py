@@ -54,16 +54,18 @@ def equivalent_shear_rate(d1, d2):
     return SQRT2 * deviator_norm(d1, d2) * sign
 
 
-def rotate_deviator(m1, m2, phi):
+def rotate_deviator(m1: float, m2: float, phi: float) -> tuple[float, float]:
     r"""Components of :math:`Q M Q^T` for a rotation by ``phi`` (radians, counter-clockwise).
 
     A symmetric traceless tensor turns at twice the angle:
     :math:`m_1 + i m_2 \mapsto (m_1 + i m_2)\, e^{2 i \phi}`.
+    Plain floats only: a rotating frame calls it at every right-hand-side
+    evaluation, where ``math`` is about 2.5x faster than numpy on scalars.
     """
-    c, s = np.cos(2.0 * phi), np.sin(2.0 * phi)
+    c, s = math.cos(2.0 * phi), math.sin(2.0 * phi)
     return m1 * c - m2 * s, m1 * s + m2 * c
 
 
 def double_contraction(a, b, n1, n2):
-    """A:N = 2 (a n1 + b n2) for A = [[a, b], [b, -a]], N = [[n1, n2], [n2, -n1]]."""
+    """A:N = 2 (a n1 + b n2) for A = [[a, b], [b, -a]], N = [[n1, n2], [n2, -n1]] (floats or arrays)."""
     return 2.0 * (a * n1 + b * n2)

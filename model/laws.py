@@ -37,7 +37,8 @@ def friction_eq2(X, X0, k1, k3, k5):
         \mu = \begin{cases} -k_1 y + k_3 y^3 & y < 0 \\
                              k_1 y + k_5 y^5 & y \ge 0 \end{cases}
 
-    continuous with a kink-free value :math:`\mu(X_0) = 0`.
+    a V about :math:`X_0`: continuous, :math:`\mu(X_0) = 0`, with a kink there
+    (the slope jumps from :math:`-k_1` to :math:`+k_1`).
     """
     y = np.asarray(X, dtype=float) - X0
     mu = np.where(y < 0.0, -k1 * y + k3 * y**3, k1 * y + k5 * y**5)

@@ -27,7 +27,6 @@ import yaml
 FORMAT_TAG = "fabric-friction-params"
 FORMAT_VERSION = 1
 
-INF = math.inf
 # Allowed open ranges (low, high) per block and key. Wide on purpose: they
 # catch typos and sign slips, not physics (the calibration decides that).
 RANGES = {

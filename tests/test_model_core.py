@@ -18,11 +18,17 @@ def constant_coefficient_params(alpha1=-0.3, alpha2=-3.75):
     return params_from_dict(d)
 
 
-def test_steady_state_matches_closed_form_for_constant_coefficients():
-    p = constant_coefficient_params()
-    a, b, X = steady_state(p, "model2")
-    a_ref, b_ref, X_ref = laws.steady_state_constant(-0.3, -3.75)
-    assert abs(a - a_ref) < 1e-8 and abs(b - b_ref) < 1e-8 and abs(X - X_ref) < 1e-8
+@pytest.mark.parametrize("model", ["model1", "model2"])
+@pytest.mark.parametrize("gammadot", [1.0, -1.0])
+def test_steady_state_is_where_a_long_shear_from_isotropy_ends(model, gammadot):
+    """The root finder against the ODE itself: 50 strain of steady shear from A = 0 (X-dependent alphas)."""
+    p = default_params()
+    a, b, X = steady_state(p, model, sign=int(gammadot))
+    history = steady_shear(50.0, gammadot)
+    end = simulate(p, history, model=model, A0=(0.0, 0.0), method="LSODA", t_eval=[history.t_end]).iloc[-1]
+    assert end.A_norm == pytest.approx(laws.fabric_norm(a, b), abs=1e-6)
+    assert end.theta_A == pytest.approx(laws.fabric_angle_deg(a, b), abs=1e-6)
+    assert end.X == pytest.approx(X, abs=1e-6)
 
 
 def test_integration_from_isotropic_reaches_closed_form_steady_state():
@@ -133,12 +139,13 @@ def test_quadratic_friction_is_used_when_asked():
     assert np.allclose(tab.mu, q.m0 + q.m1 * tab.X + q.m2 * tab.X**2)
 
 
-@pytest.mark.parametrize("kwargs, word", [
-    ({"model": "model3"}, "model"), ({"method": "Euler"}, "method"), ({"friction": "linear"}, "friction"),
-    ({"rtol": -1.0}, "rtol"), ({"method": "RK4", "step": 0.0}, "step"), ({"A0": (np.nan, 0.0)}, "A0"),
+@pytest.mark.parametrize("kwargs, message", [
+    ({"model": "model3"}, r"model = 'model3' is not one of"), ({"method": "Euler"}, r"method = 'Euler' is not one of"),
+    ({"friction": "linear"}, r"friction = 'linear' is not one of"), ({"rtol": -1.0}, r"rtol = -1.0 .*\(0, 1\)"),
+    ({"method": "RK4", "step": 0.0}, r"step = 0.0 .*\(0, inf\)"), ({"A0": (np.nan, 0.0)}, r"A0 = \(nan, 0.0\)"),
 ])
-def test_bad_options_are_rejected_by_name(kwargs, word):
-    with pytest.raises(ValueError, match=word):
+def test_bad_options_are_rejected_by_name_and_value(kwargs, message):
+    with pytest.raises(ValueError, match=message):
         simulate(default_params(), steady_shear(1.0), **kwargs)
 
 
