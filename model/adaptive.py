@@ -120,7 +120,7 @@ def _pole_error(method, why, t, y, X_c, xfun):
     X = xfun(t, y[0], y[1]) if xfun else math.nan
     return PoleError(
         f"{method}: {why} at t = {t:.6g}, X = {X:.6g}, X_c = {X_c:.6g}; the approach to the "
-        "pole is not resolvable (check the parameters: c1/sqrt2 + c2 X_c < 0 makes it repulsive)",
+        "pole is not resolvable (check the parameters: c1 + c2 X_c < 0 makes it repulsive)",
         t=t, X=X, X_c=X_c,
     )
 

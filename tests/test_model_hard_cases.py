@@ -88,7 +88,7 @@ def test_approach_to_the_pole_with_a_fine_rk4_step_stays_below():
 
 
 def test_an_attracting_pole_stops_with_an_error_naming_t_X_and_X_c():
-    p = with_model1(a1=0.5, a2=-3.0, b1=0.0, b2=0.0, c1=200.0, c2=-1000.0)  # c1/sqrt2 + c2 X_c > 0
+    p = with_model1(a1=0.5, a2=-3.0, b1=0.0, b2=0.0, c1=200.0, c2=-1000.0)  # c1 + c2 X_c > 0: the pole attracts
     with pytest.raises(PoleError, match=r"t = .*X = .*X_c = 0\.0827") as info:
         simulate(p, steady_shear(20.0), A0=(0.0, 0.0))
     assert np.isfinite(info.value.t) and info.value.X <= p.model1.X_c * 1.01
