@@ -20,11 +20,11 @@ same layout, for tests and trial runs.
 from .derived import (MIN_PRE_REVERSAL_SAMPLES, PRE_REVERSAL_WINDOW, STEADY_FRACTION, angle_difference, axial_mean,
                       fabric_angle_deg, fabric_norm, pre_reversal_state, reversal_indices, steady_values,
                       steady_window)
-from .labels import LABEL_RE, case_label, parse_case_label
+from .labels import LABEL_RE, case_label, parse_case_label, split_case_label
 from .series import CONTRACT_COLUMNS, REVERSAL_PROTOCOLS, DEMInputError, read_series, read_sidecar
 
 __all__ = ["CONTRACT_COLUMNS", "REVERSAL_PROTOCOLS", "DEMInputError", "read_series", "read_sidecar",
-           "LABEL_RE", "case_label", "parse_case_label",
+           "LABEL_RE", "case_label", "parse_case_label", "split_case_label",
            "STEADY_FRACTION", "PRE_REVERSAL_WINDOW", "MIN_PRE_REVERSAL_SAMPLES", "steady_window", "steady_values",
            "fabric_norm", "fabric_angle_deg", "axial_mean", "angle_difference", "reversal_indices",
            "pre_reversal_state"]
