@@ -22,12 +22,13 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from dem_contract import angle_difference, split_case_label
 from model import load_params, params_from_dict
 
 from . import metrics
-from .dem import load_reversal, split_label
+from .dem import load_reversal
 from .figures import sensitivity_figure
-from .metrics import QUANTITIES, angle_diff
+from .metrics import QUANTITIES
 from .predict import DEFAULT_FRICTION, MODELS, predict
 
 KEYS = {"model1": ("a1", "b1", "c1", "a2", "b2", "c2", "X_c"), "model2": ("c1", "c2", "c3")}
@@ -58,7 +59,7 @@ def _representative(case_dirs):
     by_group = {}
     for d in case_dirs:
         name = str(d).rstrip("/").split("/")[-1]
-        by_group.setdefault(split_label(name)[0], []).append((name, d))
+        by_group.setdefault(split_case_label(name)[0], []).append((name, d))
     first = sorted(by_group)[0]
     return sorted(by_group[first])[0][1]
 
@@ -107,7 +108,7 @@ def run(case_dirs, params_path, protocols, figure_path, set_name="all", fraction
                     for q in QUANTITIES:
                         diff = pred.table[q].to_numpy() - nominal.table[q].to_numpy()
                         if q == "theta_A":
-                            diff = angle_diff(pred.table[q], nominal.table[q])
+                            diff = angle_difference(pred.table[q], nominal.table[q])
                         row[f"dmax_{q}"] = float(np.max(np.abs(diff)))
                 row.update({f"rmse_{q}": v for q, v in
                             ((q, metrics.errors(dem, pred.table)[f"rmse_{q}"]) for q in QUANTITIES)})
@@ -124,7 +125,7 @@ def run(case_dirs, params_path, protocols, figure_path, set_name="all", fraction
                     for q in QUANTITIES:
                         if q == "theta_A" and nominal.table is not None:
                             ref = nominal.table[q].to_numpy()
-                            dev = np.array([angle_diff(t[q], ref) for t in ok])
+                            dev = np.array([angle_difference(t[q], ref) for t in ok])
                             lo[q], hi[q] = ref + dev.min(axis=0), ref + dev.max(axis=0)
                         else:
                             arr = np.array([t[q].to_numpy() for t in ok])
