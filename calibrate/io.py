@@ -275,9 +275,10 @@ def steady_values(cases) -> dict:
     beyond it, or a new run may start past the pole.
     """
     rows = []
-    for c in cases:
+    starts = [pre_reversal_state(c.preshear.data) for c in cases]   # also the pre-shear's direction g
+    for c, start in zip(cases, starts):
         st = c.preshear.meta["steady"]
-        g = np.sign(np.median(c.preshear.data["gammadot"].to_numpy()))
+        g = start["gammadot_sign"]
         rows.append((st["A_xx"], st["A_xy"] * g, st["mu"], st["se_A_xx"], st["se_A_xy"], st["se_mu"]))
     r = np.array(rows)
     n = len(r)
@@ -294,7 +295,7 @@ def steady_values(cases) -> dict:
     out["theta_A"] = float(fabric_angle_deg(a, b))
     # the X a reversal starts from (mirrored state at the end of each pre-shear): the largest
     # seen, and the upper 97.5 % prediction bound for a new seed (Student t over the seeds)
-    xr = np.array([-pre_reversal_state(c.preshear.data)["X"] for c in cases])
+    xr = np.array([-start["X"] for start in starts])
     out["X_reversal_max"] = float(xr.max())
     out["X_reversal_bound"] = reversal_start_bound(xr)
     return {k: float(v) for k, v in out.items()}
