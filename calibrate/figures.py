@@ -7,6 +7,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from dem_contract import fabric_angle_deg, fabric_norm  # noqa: E402
 from model.laws import alpha_model1, alpha_model2, friction_eq2, friction_quadratic, stress_ratio_eq2  # noqa: E402
 
 PROTO_COLORS = {"heaviside": "tab:blue", "sinusoidal": "tab:orange", "preshear": "tab:gray"}
@@ -116,15 +117,15 @@ def fig_curves(replays, predictions: dict, path):
     for j, proto in enumerate(protos):
         reps = [r for r in replays if r.label.endswith(proto)]
         for r in reps:
-            axes[0, j].plot(r.s, np.sqrt(2 * (r.a**2 + r.b**2)), ".", ms=2, color="0.7")
-            axes[1, j].plot(r.s, np.mod(np.degrees(0.5 * np.arctan2(r.b, r.a)), 180), ".", ms=2, color="0.7")
+            axes[0, j].plot(r.s, fabric_norm(r.a, r.b), ".", ms=2, color="0.7")
+            axes[1, j].plot(r.s, fabric_angle_deg(r.a, r.b), ".", ms=2, color="0.7")
             axes[2, j].plot(r.s, r.mu, ".", ms=2, color="0.7")
         for (label, pred), style in zip(predictions.items(), ("r-", "b--", "m-.", "c:")):
             m = pred.get(reps[0].label)
             if m is None:
                 continue
-            axes[0, j].plot(reps[0].s, np.sqrt(2 * (m[:, 0] ** 2 + m[:, 1] ** 2)), style, label=label)
-            axes[1, j].plot(reps[0].s, np.mod(np.degrees(0.5 * np.arctan2(m[:, 1], m[:, 0])), 180), style)
+            axes[0, j].plot(reps[0].s, fabric_norm(m[:, 0], m[:, 1]), style, label=label)
+            axes[1, j].plot(reps[0].s, fabric_angle_deg(m[:, 0], m[:, 1]), style)
             axes[2, j].plot(reps[0].s, m[:, 2], style)
         axes[0, j].set_title(proto)
         axes[0, j].set_ylabel(r"$|A|$")

@@ -14,10 +14,12 @@ without a reversal, and a pre-shear that never reached steady state (these are
 the calibration's own). Nothing downstream re-checks.
 
 Every contract column must be present; columns beyond the contract are ignored.
+The case labels, the steady window, the fabric's norm and angle and the
+pre-reversal state are ``dem_contract``'s (``labels``, ``derived``), the same
+numbers the campaign summary and the comparison report.
 """
 from __future__ import annotations
 
-import re
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -26,18 +28,17 @@ import numpy as np
 import pandas as pd
 from scipy.stats import t as student_t
 
-from dem_contract import (CONTRACT_COLUMNS, REVERSAL_PROTOCOLS, DEMInputError, pre_reversal_state, read_series,
-                          read_sidecar)
+from dem_contract import (CONTRACT_COLUMNS, REVERSAL_PROTOCOLS, STEADY_FRACTION, DEMInputError, derived,
+                          fabric_angle_deg, fabric_norm, pre_reversal_state, read_series, read_sidecar,
+                          reversal_indices, split_case_label, steady_window)
 
 #: The columns the calibration computes with: they must be finite in every row.
 USED_COLUMNS = ("t", "strain", "gammadot", "A_xx", "A_xy", "sigma_xy", "p", "mu")
 
 MIN_SAMPLES = 50            # rows per file
-STEADY_WINDOW = 0.5         # last fraction of the pre-shear strain judged for steadiness
+STEADY_WINDOW = STEADY_FRACTION  # last fraction of the pre-shear strain judged for steadiness (dem_contract)
 STEADY_REL_TOL = 0.1        # allowed drift across that window, relative to the level
 STEADY_SE_FACTOR = 4.0      # ... or this many standard errors of the drift, if larger
-
-CASE_RE = re.compile(r"^(?P<group>.+)_s(?P<seed>[0-9A-Za-z]+)$")
 
 
 @dataclass
@@ -85,14 +86,6 @@ class Case:
     runs: dict  # protocol -> Run
 
 
-def split_case_name(name: str):
-    """``p1e5_I0.001_s3`` -> (``p1e5_I0.001``, ``3``); a name without ``_s<seed>`` is its own group."""
-    m = CASE_RE.match(name)
-    if m:
-        return m.group("group"), m.group("seed")
-    return name, name
-
-
 def read_run(path, protocol: str, min_samples: int = MIN_SAMPLES) -> Run:
     """Read one CSV of the contract and check it.
 
@@ -120,7 +113,7 @@ def read_run(path, protocol: str, min_samples: int = MIN_SAMPLES) -> Run:
         raise DEMInputError(f"{path}: column 'p' has non-positive values")
     meta = read_sidecar(path)
     case = path.parent.name
-    group, seed = split_case_name(case)
+    group, seed = split_case_label(case)
     return Run(path=path, case=case, group=group, seed=seed, protocol=protocol, data=data, meta=meta)
 
 
@@ -128,7 +121,8 @@ def check_steady(run: Run, window: float = STEADY_WINDOW, rel_tol: float = STEAD
                  se_factor: float = STEADY_SE_FACTOR, raise_on_drift: bool = True) -> dict:
     r"""Check that a pre-shear ended in steady state and return its steady values.
 
-    Rule: over the last ``window`` fraction of the run's strain, fit a straight
+    Rule: over the last ``window`` fraction of the run's strain
+    (``dem_contract.steady_window``), fit a straight
     line in strain to A_xx, A_xy and mu. The drift it predicts across the
     window must be below ``max(rel_tol * level, se_factor * SE(drift))``, with
     ``level`` the window mean of |A| (fabric) or of mu, and SE(drift) corrected
@@ -137,7 +131,9 @@ def check_steady(run: Run, window: float = STEADY_WINDOW, rel_tol: float = STEAD
     Returns
     -------
     dict
-        Window means ``A_xx, A_xy, mu``, their standard errors ``se_*``, and
+        The steady values of the window (``dem_contract.steady_values``: the
+        means ``A_xx, A_xy, mu``, ``A_norm``, ``theta_A``, ...), the standard
+        errors ``se_A_xx, se_A_xy, se_mu`` of the three means, and
         ``drift_error``: the message of the first quantity that drifts, or None.
 
     Raises
@@ -146,22 +142,22 @@ def check_steady(run: Run, window: float = STEADY_WINDOW, rel_tol: float = STEAD
         Naming the file, the quantity and its drift (only with ``raise_on_drift``).
     """
     d = run.data
-    return _drift_test(run.path, d["strain"].to_numpy(), {c: d[c].to_numpy() for c in ("A_xx", "A_xy", "mu")},
-                       window, rel_tol, se_factor, raise_on_drift)
+    drift = _drift_test(run.path, d["strain"].to_numpy(), {c: d[c].to_numpy() for c in ("A_xx", "A_xy", "mu")},
+                        window, rel_tol, se_factor, raise_on_drift)
+    return {**derived.steady_values(d, window), **drift}
 
 
 def _drift_test(path, strain, series, window, rel_tol, se_factor, raise_on_drift) -> dict:
-    """The drift test of ``check_steady`` on arrays (one run, or an ensemble mean)."""
-    s = np.abs(strain - strain[0])
-    span = s[-1]
-    if span <= 0:
+    """The drift test of ``check_steady`` on arrays (one run, or an ensemble mean): ``drift_error`` and ``se_*``."""
+    if np.abs(strain[-1] - strain[0]) <= 0:
         raise DEMInputError(f"{path}: the strain does not advance")
-    m = s >= (1.0 - window) * span
+    m = steady_window(strain, window)
+    s = np.abs(strain - strain[0])
     if m.sum() < 10:
         raise DEMInputError(f"{path}: fewer than 10 samples in the last {window:.0%} of the strain; cannot judge steady state")
     x = s[m] - s[m].mean()
     a, b, mu = (series[c][m] for c in ("A_xx", "A_xy", "mu"))
-    level_A = float(np.mean(np.sqrt(2 * (a**2 + b**2))))
+    level_A = float(np.mean(fabric_norm(a, b)))
     out = {"drift_error": None}
     for name, y, level in (("A_xx", a, level_A), ("A_xy", b, level_A), ("mu", mu, float(np.mean(mu)))):
         slope, icpt = np.polyfit(x, y, 1)
@@ -179,7 +175,6 @@ def _drift_test(path, strain, series, window, rel_tol, se_factor, raise_on_drift
             )
             if raise_on_drift:
                 raise DEMInputError(out["drift_error"])
-        out[name] = float(np.mean(y))
         out[f"se_{name}"] = inflation * sd / np.sqrt(len(y))
     return out
 
@@ -243,12 +238,12 @@ def read_case(case_dir, protocols=REVERSAL_PROTOCOLS, min_samples: int = MIN_SAM
     pre = read_run(case_dir / "preshear.csv", "preshear", min_samples)
     pre.meta["steady"] = check_steady(pre, raise_on_drift=False)  # judged per group in read_cases
     runs = {p: read_run(case_dir / f"{p}.csv", p, min_samples) for p in protocols}
-    g_pre = np.sign(np.median(pre.data["gammadot"].to_numpy()))
+    g_pre = pre.data["gammadot"].to_numpy()
     for r in runs.values():
-        if not np.any(np.sign(r.data["gammadot"].to_numpy()) == -g_pre):
-            raise DEMInputError(f"{r.path}: 'gammadot' never takes the sign opposite to the pre-shear's: "
-                                f"no reversal in this {r.protocol} run")
-    group, seed = split_case_name(case_dir.name)
+        if reversal_indices(np.concatenate([g_pre, r.data["gammadot"].to_numpy()])).size == 0:
+            raise DEMInputError(f"{r.path}: 'gammadot' never takes the sign opposite to the pre-shear's "
+                                f"(for {derived.REVERSAL_MIN_RUN} samples in a row): no reversal in this {r.protocol} run")
+    group, seed = split_case_label(case_dir.name)
     return Case(path=case_dir, name=case_dir.name, group=group, seed=seed, preshear=pre, runs=runs)
 
 
@@ -280,9 +275,10 @@ def steady_values(cases) -> dict:
     beyond it, or a new run may start past the pole.
     """
     rows = []
-    for c in cases:
+    starts = [pre_reversal_state(c.preshear.data) for c in cases]   # also the pre-shear's direction g
+    for c, start in zip(cases, starts):
         st = c.preshear.meta["steady"]
-        g = np.sign(np.median(c.preshear.data["gammadot"].to_numpy()))
+        g = start["gammadot_sign"]
         rows.append((st["A_xx"], st["A_xy"] * g, st["mu"], st["se_A_xx"], st["se_A_xy"], st["se_mu"]))
     r = np.array(rows)
     n = len(r)
@@ -295,11 +291,11 @@ def steady_values(cases) -> dict:
     a, b, mu = mean
     out = {"A_xx": a, "A_xy": b, "mu": mu, "se_A_xx": se[0], "se_A_xy": se[1], "se_mu": se[2],
            "X": np.sqrt(2) * b, "se_X": np.sqrt(2) * se[1], "n_seeds": n}
-    out["A_norm"] = float(np.sqrt(2 * (a**2 + b**2)))
-    out["theta_A"] = float(np.mod(np.degrees(0.5 * np.arctan2(b, a)), 180.0))
+    out["A_norm"] = float(fabric_norm(a, b))
+    out["theta_A"] = float(fabric_angle_deg(a, b))
     # the X a reversal starts from (mirrored state at the end of each pre-shear): the largest
     # seen, and the upper 97.5 % prediction bound for a new seed (Student t over the seeds)
-    xr = np.array([-pre_reversal_state(c.preshear.data)["X"] for c in cases])
+    xr = np.array([-start["X"] for start in starts])
     out["X_reversal_max"] = float(xr.max())
     out["X_reversal_bound"] = reversal_start_bound(xr)
     return {k: float(v) for k, v in out.items()}

@@ -35,7 +35,7 @@ import numpy as np
 import pandas as pd
 from scipy.optimize import least_squares
 
-from dem_contract import pre_reversal_state
+from dem_contract import angle_difference, fabric_angle_deg, fabric_norm, pre_reversal_state
 from model import PoleError, params_from_dict, simulate, steady_shear
 
 from . import fits
@@ -257,12 +257,8 @@ def score(params, replays, model: str, settings: Route2Settings, sigma_mu: float
         dA, dth, dmu, cache = [], [], [], {}
         for r in replays:
             m = replay_run(params, r, model, friction, settings, cache)
-            nm = np.sqrt(2 * (m[:, 0] ** 2 + m[:, 1] ** 2))
-            nd = np.sqrt(2 * (r.a**2 + r.b**2))
-            tm = np.degrees(0.5 * np.arctan2(m[:, 1], m[:, 0]))
-            td = np.degrees(0.5 * np.arctan2(r.b, r.a))
-            dth.append((tm - td + 90.0) % 180.0 - 90.0)
-            dA.append(nm - nd)
+            dth.append(angle_difference(fabric_angle_deg(m[:, 0], m[:, 1]), fabric_angle_deg(r.a, r.b)))
+            dA.append(fabric_norm(m[:, 0], m[:, 1]) - fabric_norm(r.a, r.b))
             dmu.append(m[:, 2] - r.mu)
         rms = lambda v: float(np.sqrt(np.mean(np.concatenate(v) ** 2)))  # noqa: E731
         return {"score": float(np.sqrt(np.mean(z**2))), "rms_A_norm": rms(dA), "rms_theta_A": rms(dth),

@@ -14,8 +14,9 @@ Two levels of comparison:
 Claims (``metrics.claims``) are measured on the DEM after a centred running
 mean over ``dem_smooth`` samples (its noise otherwise sets the minima), and on
 the models as they are. The steady values the recovery is measured against are
-the DEM's own before the reversal for the DEM, and each model's own steady
-state (``model.steady_state``) for the models.
+the DEM's pre-shear steady state for the DEM (``dem_contract.steady_values``;
+for an ensemble, |A| of the seeds' mean steady fabric and their mean mu), and
+each model's own steady state (``model.steady_state``) for the models.
 """
 from __future__ import annotations
 
@@ -24,12 +25,13 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from model import fabric_angle_deg, fabric_norm, load_params, steady_state
+from dem_contract import angle_difference, fabric_angle_deg, fabric_norm
+from model import load_params, steady_state
 
 from . import metrics
 from .dem import load_reversal
 from .predict import DEFAULT_FRICTION, MODELS, predict
-from .metrics import QUANTITIES, angle_diff
+from .metrics import QUANTITIES
 
 DEM_SMOOTH = 5
 
@@ -76,7 +78,7 @@ def ensemble_curves(revs, preds):
                dem_mu=np.mean([d["mu"] for d in dem], axis=0))
     ddof = 1 if len(dem) > 1 else 0
     out["dem_A_norm_std"] = np.std([fabric_norm(d["A_xx"], d["A_xy"]) for d in dem], axis=0, ddof=ddof)
-    dev = [angle_diff(fabric_angle_deg(d["A_xx"], d["A_xy"]), out["dem_theta_A"]) for d in dem]
+    dev = [angle_difference(fabric_angle_deg(d["A_xx"], d["A_xy"]), out["dem_theta_A"]) for d in dem]
     out["dem_theta_A_std"] = np.sqrt(np.sum(np.square(dev), axis=0) / max(len(dem) - ddof, 1))
     out["dem_mu_std"] = np.std([d["mu"] for d in dem], axis=0, ddof=ddof)
     n_ok = {}
@@ -218,14 +220,14 @@ def _seed_rows(r, preds, base, steady, dem_smooth):
 def _ensemble_rows(grevs, gpreds, base, steady, friction, dem_smooth):
     """Seed-averaged curves of one ensemble and protocol, with their error and claim rows.
 
-    The DEM's claims are measured against the ensemble's pre-reversal |A| and steady mu;
+    The DEM's claims are measured against the ensemble's steady |A| and mu (pre-shear);
     a model's status says how many seeds failed.
     """
     ens = ensemble_curves(grevs, gpreds)
     s = ens["s_rev"].to_numpy()
-    A0 = np.mean([r.A0 for r in grevs], axis=0)
+    steady_fabric = np.mean([r.steady_fabric for r in grevs], axis=0)
     claims = [_claims_row(base, "dem", s, ens["dem_A_xx"].to_numpy(), ens["dem_A_xy"].to_numpy(),
-                          ens["dem_mu"].to_numpy(), float(fabric_norm(*A0)),
+                          ens["dem_mu"].to_numpy(), float(fabric_norm(*steady_fabric)),
                           float(np.mean([r.steady_mu for r in grevs])), dem_smooth)]
     dem = {q: ens[f"dem_{q}"].to_numpy() for q in QUANTITIES}
     errors = []

@@ -4,9 +4,10 @@ A case is a directory ``<label>/`` with ``preshear.csv`` and one CSV per
 reversal protocol (``heaviside.csv``, ``sinusoidal.csv``), in the column layout
 of the DEM contract (docs/data-contract.md), and optional JSON sidecars ``<stage>.json``. Only the
 columns in ``USED_COLUMNS`` are read (and must be present); nothing beyond the
-contract is needed. The contract's checks and the error type live in
-``dem_contract``; the reversal start, A0 and the steady values are this
-package's.
+contract is needed. The contract's checks, the error type, the case labels
+and every derived quantity (steady values, A0, |A|, theta_A, the reversal
+check) live in ``dem_contract``; where the reversal starts and the strain
+travelled since it are this package's.
 
 Conventions
 -----------
@@ -17,39 +18,32 @@ Conventions
   samples within ``a0_window`` strain of its end (``dem_contract.pre_reversal_state``,
   the same state the calibration bounds X_c with): the DEM fabric just before
   the reversal, with its per-sample noise averaged down.
-- ``steady_A`` (= |mean A|) and ``steady_mu`` (mean mu) over the same window
-  are the steady values the reversal recovers towards (by symmetry the mirrored
-  steady state has the same |A| and mu).
+- ``steady_A`` (= |mean A|) and ``steady_mu`` (mean mu) are the steady values
+  of the pre-shear (``dem_contract.steady_values``: the last half of its
+  strain, the values the calibration and the campaign summary report), the
+  values the reversal recovers towards (by symmetry the mirrored steady state
+  has the same |A| and mu).
+- The reversal run must reverse the pre-shear (``dem_contract.reversal_indices``
+  on the pre-shear's rate followed by the run's).
 - ``s_rev``: strain travelled since the reversal, the running sum of
   ``|d strain|`` (monotone also for a sinusoidal reversal, which first keeps
   shearing forward, stops, then turns back). It is the abscissa of every figure.
 """
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-from dem_contract import (PRE_REVERSAL_WINDOW, REVERSAL_PROTOCOLS, DEMInputError, pre_reversal_state, read_series,
-                          read_sidecar)
+from dem_contract import (PRE_REVERSAL_WINDOW, REVERSAL_PROTOCOLS, DEMInputError, fabric_angle_deg, fabric_norm,
+                          pre_reversal_state, read_series, read_sidecar, reversal_indices, split_case_label,
+                          steady_values)
 
 USED_COLUMNS = ("t", "strain", "gammadot", "A_xx", "A_xy", "mu")
-LABEL_RE = re.compile(r"^(?P<group>p[^_]+_I[^_]+)_s(?P<seed>[^_/]+)$")
 A0_WINDOW = PRE_REVERSAL_WINDOW   # strain over which the pre-reversal fabric is averaged
 MIN_SAMPLES = 10
-
-
-def split_label(label: str):
-    """``p1e5_I0.001_s3`` -> (``p1e5_I0.001``, ``3``): the ensemble and the seed.
-
-    A directory name that does not follow ``p<pressure>_I<inertial>_s<seed>``
-    is an ensemble of its own.
-    """
-    m = LABEL_RE.match(label)
-    return (m.group("group"), m.group("seed")) if m else (label, label)
 
 
 @dataclass
@@ -67,7 +61,9 @@ class Reversal:
     A0 : (float, float)
         Mean (A_xx, A_xy) of the pre-shear just before the reversal.
     steady_A, steady_mu : float
-        |A0| and the mean mu over the same window.
+        |A| and mu of the pre-shear's steady state (``dem_contract.steady_values``).
+    steady_fabric : (float, float)
+        Its mean (A_xx, A_xy).
     t0, strain0 : float
         Time and strain at which the reversal starts (the sidecar's
         ``reversal_t``, ``reversal_strain`` when present, else the first sample).
@@ -84,15 +80,11 @@ class Reversal:
     A0: tuple
     steady_A: float
     steady_mu: float
+    steady_fabric: tuple
     t0: float
     strain0: float
     rate_before: float = float("nan")
     meta: dict = field(default_factory=dict)
-
-
-def _fabric(a, b):
-    from model import fabric_angle_deg, fabric_norm
-    return fabric_norm(a, b), fabric_angle_deg(a, b)
 
 
 def load_reversal(case_dir, protocol: str, a0_window: float = A0_WINDOW) -> Reversal:
@@ -136,20 +128,20 @@ def load_reversal(case_dir, protocol: str, a0_window: float = A0_WINDOW) -> Reve
     # the state before the reversal (dem_contract), and a check that the reversal opposes it
     st = pre_reversal_state(pre, a0_window)
     g_pre = st["gammadot"]
-    g_rev = rev["gammadot"].to_numpy()
-    if g_pre == 0.0 or not np.any(g_rev * g_pre < 0):
+    if g_pre == 0.0 or reversal_indices(np.concatenate([pre["gammadot"].to_numpy(), rev["gammadot"].to_numpy()])).size == 0:
         raise DEMInputError(f"{path}: the rate never opposes the pre-shear's (median {g_pre:.4g}): no reversal")
     a0, b0 = st["A_xx"], st["A_xy"]
-    steady_A = float(_fabric(a0, b0)[0])
-    steady_mu = st["mu"]
+    steady = steady_values(pre)
     data = rev.copy()
     t0 = float(data["t"].iloc[0]) if t_rev is None else t_rev
     strain0 = float(data["strain"].iloc[0]) if s_rev0 is None else s_rev0
     data["tau"] = data["t"] - t0
     st = data["strain"].to_numpy()
     data["s_rev"] = abs(st[0] - strain0) + np.concatenate([[0.0], np.cumsum(np.abs(np.diff(st)))])
-    data["A_norm"], data["theta_A"] = _fabric(data["A_xx"].to_numpy(), data["A_xy"].to_numpy())
-    group, seed = split_label(case_dir.name)
+    a, b = data["A_xx"].to_numpy(), data["A_xy"].to_numpy()
+    data["A_norm"], data["theta_A"] = fabric_norm(a, b), fabric_angle_deg(a, b)
+    group, seed = split_case_label(case_dir.name)
     return Reversal(label=case_dir.name, group=group, seed=seed, protocol=protocol, path=path, data=data,
-                    A0=(a0, b0), steady_A=steady_A, steady_mu=steady_mu, t0=t0, strain0=strain0,
+                    A0=(a0, b0), steady_A=steady["A_norm"], steady_mu=steady["mu"],
+                    steady_fabric=(steady["A_xx"], steady["A_xy"]), t0=t0, strain0=strain0,
                     rate_before=g_pre, meta=meta)

@@ -1,18 +1,17 @@
 r"""Errors of a model against the DEM, and the paper's claims as numbers.
 
 Quantities: ``A_norm`` (|A|), ``theta_A`` (degrees) and ``mu``. Angle errors are
-taken modulo 180 degrees (``angle_diff``), so 179 and 1 degree differ by 2.
+taken modulo 180 degrees (``dem_contract.angle_difference``), so 179 and 1
+degree differ by 2; |A| and theta_A are ``dem_contract.fabric_norm`` and
+``fabric_angle_deg``.
 """
 from __future__ import annotations
 
 import numpy as np
 
+from dem_contract import angle_difference, fabric_angle_deg, fabric_norm
+
 QUANTITIES = ("A_norm", "theta_A", "mu")
-
-
-def angle_diff(a, b):
-    """Signed difference ``a - b`` of axial angles in degrees, in [-90, 90)."""
-    return np.mod(np.asarray(a, float) - np.asarray(b, float) + 90.0, 180.0) - 90.0
 
 
 def errors(dem: dict, model: dict) -> dict:
@@ -35,7 +34,7 @@ def errors(dem: dict, model: dict) -> dict:
         m = np.asarray(model[q], float)
         if d.shape != m.shape or d.size == 0:
             raise ValueError(f"errors: '{q}' has {d.size} DEM and {m.size} model values; they must match and be > 0")
-        e = angle_diff(m, d) if q == "theta_A" else m - d
+        e = angle_difference(m, d) if q == "theta_A" else m - d
         out[f"rmse_{q}"] = float(np.sqrt(np.mean(e ** 2)))
         out[f"max_{q}"] = float(np.max(np.abs(e)))
     return out
@@ -125,7 +124,6 @@ def claims(s, A_xx, A_xy, mu, steady_A: float, steady_mu: float, smooth: int = 1
         ``theta_end``, ``min_A``, ``s_min_A``, ``min_mu``, ``s_min_mu``,
         ``s_recover_A``, ``s_recover_mu`` (NaN if not reached within the run).
     """
-    from model import fabric_angle_deg, fabric_norm
     a, b, m = (running_mean(v, smooth) for v in (A_xx, A_xy, mu))
     A = fabric_norm(a, b)
     th = fabric_angle_deg(a, b)

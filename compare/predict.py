@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from dem_contract import reversal_indices
 from model import PoleError, simulate, tabulated
 
 from .dem import Reversal
@@ -57,9 +58,8 @@ class Prediction:
 
 
 def _sign_changes(g):
-    s = np.sign(g)
-    s = s[s != 0]
-    return int(np.count_nonzero(s[1:] != s[:-1]))
+    """Every change of sign of ``g`` (zeros skipped): ``dem_contract.reversal_indices`` with no dead band or minimum run."""
+    return int(reversal_indices(g, dead_band=0.0, min_run=1).size)
 
 
 def clean_rate(rev: Reversal):

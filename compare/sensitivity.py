@@ -22,12 +22,13 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
+from dem_contract import angle_difference, split_case_label
 from model import load_params, params_from_dict
 
 from . import metrics
-from .dem import load_reversal, split_label
+from .dem import load_reversal
 from .figures import sensitivity_figure
-from .metrics import QUANTITIES, angle_diff
+from .metrics import QUANTITIES
 from .predict import DEFAULT_FRICTION, MODELS, predict
 
 KEYS = {"model1": ("a1", "b1", "c1", "a2", "b2", "c2", "X_c"), "model2": ("c1", "c2", "c3")}
@@ -58,7 +59,7 @@ def _representative(case_dirs):
     by_group = {}
     for d in case_dirs:
         name = str(d).rstrip("/").split("/")[-1]
-        by_group.setdefault(split_label(name)[0], []).append((name, d))
+        by_group.setdefault(split_case_label(name)[0], []).append((name, d))
     first = sorted(by_group)[0]
     return sorted(by_group[first])[0][1]
 
@@ -132,7 +133,7 @@ def _change_row(row, table, nominal_table, dem):
         for q in QUANTITIES:
             diff = table[q].to_numpy() - nominal_table[q].to_numpy()
             if q == "theta_A":
-                diff = angle_diff(table[q], nominal_table[q])
+                diff = angle_difference(table[q], nominal_table[q])
             row[f"dmax_{q}"] = float(np.max(np.abs(diff)))
     row.update({f"rmse_{q}": v for q, v in ((q, metrics.errors(dem, table)[f"rmse_{q}"]) for q in QUANTITIES)})
     row["theta_passage"] = metrics.theta_passage(table["theta_A"])
@@ -152,7 +153,7 @@ def _envelopes(curves, nominal):
             for q in QUANTITIES:
                 if q == "theta_A" and nominal.table is not None:
                     ref = nominal.table[q].to_numpy()
-                    dev = np.array([angle_diff(t[q], ref) for t in ok])
+                    dev = np.array([angle_difference(t[q], ref) for t in ok])
                     lo[q], hi[q] = ref + dev.min(axis=0), ref + dev.max(axis=0)
                 else:
                     arr = np.array([t[q].to_numpy() for t in ok])

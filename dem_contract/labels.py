@@ -40,3 +40,13 @@ def parse_case_label(label: str) -> dict | None:
     except ValueError:
         return None
     return dict(group=m["group"], pressure=pressure, inertial_number=inertial_number, seed=int(m["seed"]))
+
+
+def split_case_label(label: str) -> tuple[str, str]:
+    """The ensemble and the seed of a case label, ``p1e5_I0.001_s3`` -> (``p1e5_I0.001``, ``3``).
+
+    A name that is not a case label (``parse_case_label`` returns None) is an
+    ensemble of its own: (``label``, ``label``).
+    """
+    parts = parse_case_label(label)
+    return (label, label) if parts is None else (parts["group"], str(parts["seed"]))

@@ -16,9 +16,12 @@ docs/data-contract.md) and builds:
 
 Notes
 -----
-Steady values are taken over the last ``steady_window`` of pre-shear strain:
-mu as the mean of the sampled mu, |A| and theta_A from the mean A
-(|A| = sqrt(2 (a^2 + b^2)), theta_A = atan2(b, a)/2 mod 180 deg, MODEL.md).
+The files are read through ``dem_contract``'s readers, and every derived
+quantity is ``dem_contract``'s: steady values over the last ``steady_window``
+of pre-shear strain (``steady_values``): mu as the mean of the sampled mu,
+|A| and theta_A from the mean A (``fabric_norm``, ``fabric_angle_deg``);
+angle differences modulo 180 deg (``angle_difference``); the mean of theta_A
+over seeds on the circle of axial angles (``axial_mean``).
 
 The seed spread is the root mean square of the differences between every pair
 of base seeds: the typical difference of two single runs that differ only by
@@ -27,7 +30,6 @@ their seed, directly comparable with a deviation between two single runs.
 from __future__ import annotations
 
 import itertools
-import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -35,10 +37,16 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
+from dem_contract import (DEMInputError, angle_difference, axial_mean, fabric_angle_deg, fabric_norm, read_series,
+                          read_sidecar, steady_values)
+
 from .grid import AXES, REPEAT_PREFIX
 
 QUANTITIES = ("mu", "A_norm", "theta_A_deg")
 STAGES = ("pack", "preshear", "heaviside")
+#: The columns read from each stage's series.
+COLUMNS = {"preshear": ("t", "strain", "A_xx", "A_xy", "mu", "inertial_number"),
+           "heaviside": ("t", "strain", "A_xx", "A_xy", "mu")}
 
 DEFAULT_TOLERANCE = {
     "mu": 0.02, "A_norm": 0.01, "theta_A_deg": 2.0,
@@ -50,26 +58,13 @@ class StudyInputError(ValueError):
     pass
 
 
-def fabric_norm_angle(a, b):
-    """|A| and theta_A (deg, in [0, 180)) of A = [[a, b], [b, -a]] (MODEL.md)."""
-    a, b = np.asarray(a, float), np.asarray(b, float)
-    return np.sqrt(2 * (a**2 + b**2)), np.mod(np.degrees(0.5 * np.arctan2(b, a)), 180.0)
-
-
-def angle_difference(x, y):
-    """x - y for angles of period 180 deg, in [-90, 90)."""
-    return np.mod(np.asarray(x) - np.asarray(y) + 90.0, 180.0) - 90.0
-
-
 def steady_state(preshear: pd.DataFrame, window: float) -> dict:
-    """Steady mu, |A|, theta_A and achieved I over the last ``window`` of pre-shear strain."""
-    s = preshear["strain"].to_numpy()
-    tail = preshear[s >= s[-1] - window]
-    if len(tail) < 2:
+    """Steady mu, |A|, theta_A and achieved I over the last ``window`` of pre-shear strain (``dem_contract.steady_values``)."""
+    st = steady_values(preshear, last_strain=window)
+    if st["n_samples"] < 2:
         raise StudyInputError(f"fewer than 2 samples in the last {window:g} of pre-shear strain")
-    A_norm, theta = fabric_norm_angle(tail["A_xx"].mean(), tail["A_xy"].mean())
-    return {"mu": float(tail["mu"].mean()), "A_norm": float(A_norm), "theta_A_deg": float(theta),
-            "inertial_number": float(tail["inertial_number"].mean())}
+    return {"mu": st["mu"], "A_norm": st["A_norm"], "theta_A_deg": st["theta_A"],
+            "inertial_number": st["inertial_number"]}
 
 
 def transient_curves(reversal: pd.DataFrame, reversal_strain: float, edges: np.ndarray,
@@ -95,9 +90,9 @@ def transient_curves(reversal: pd.DataFrame, reversal_strain: float, edges: np.n
     for col in ("mu", "A_xx", "A_xy"):
         v = reversal[col].to_numpy()[order]
         out[col] = np.interp(fine, x, v).reshape(len(centres), sub).mean(axis=1)
-    A_norm, theta = fabric_norm_angle(out["A_xx"], out["A_xy"])
     return pd.DataFrame({"strain_since_reversal": centres, "mu": out["mu"],
-                         "A_norm": A_norm, "theta_A_deg": theta})
+                         "A_norm": fabric_norm(out["A_xx"], out["A_xy"]),
+                         "theta_A_deg": fabric_angle_deg(out["A_xx"], out["A_xy"])})
 
 
 def curve_rms(c: pd.DataFrame, ref: pd.DataFrame) -> dict:
@@ -123,11 +118,14 @@ class PointResult:
 def load_point(case_dir: Path, point: str, steady_window: float, edges: np.ndarray) -> PointResult:
     case_dir = Path(case_dir)
     try:
-        sidecars = {s: json.loads((case_dir / f"{s}.json").read_text()) for s in STAGES}
-        pre = pd.read_csv(case_dir / "preshear.csv")
-        rev = pd.read_csv(case_dir / "heaviside.csv")
-    except FileNotFoundError as e:
-        raise StudyInputError(f"{point}: missing output {e.filename}") from e
+        sidecars = {s: read_sidecar(case_dir / f"{s}.csv") for s in STAGES}
+        missing = [s for s, side in sidecars.items() if not side]
+        if missing:
+            raise DEMInputError(f"{case_dir / (missing[0] + '.json')}: file not found")
+        pre = read_series(case_dir / "preshear.csv", COLUMNS["preshear"], what="the pre-shear of the point")
+        rev = read_series(case_dir / "heaviside.csv", COLUMNS["heaviside"], what="the heaviside run of the point")
+    except DEMInputError as e:
+        raise StudyInputError(f"{point}: missing or bad output: {e}") from None
     shear = [sidecars["preshear"], sidecars["heaviside"]]
     shear_wall = sum(s["wall_time_s"] for s in shear)
     shear_psteps = sum(s["particle_steps_per_s"] * s["wall_time_s"] for s in shear)
@@ -236,15 +234,29 @@ def repeat_table(points: pd.DataFrame, results: dict[str, PointResult]) -> pd.Da
         for q in QUANTITIES:
             x = np.array([r.steady[q] for r in runs])
             y = np.array([r.steady[q] for r in base])
-            se_x = x.std(ddof=1) / np.sqrt(len(x)) if len(x) > 1 else np.nan
-            se_y = y.std(ddof=1) / np.sqrt(len(y)) if len(y) > 1 else np.nan
-            diff = angle_difference(x.mean(), y.mean()) if q == "theta_A_deg" else x.mean() - y.mean()
+            (mean_x, se_x), (mean_y, se_y) = (_mean_and_se(v, axial=q == "theta_A_deg") for v in (x, y))
+            diff = angle_difference(mean_x, mean_y) if q == "theta_A_deg" else mean_x - mean_y
             with np.errstate(divide="ignore", invalid="ignore"):   # identical seeds: z is +-inf or NaN
                 z = float(np.divide(diff, np.hypot(se_x, se_y)))
-            rows.append({"axis": axis, "value": float(value), "quantity": q, "n_seeds": len(x), "mean": x.mean(),
-                         "se": se_x, "n_base_seeds": len(y), "base_mean": y.mean(), "base_se": se_y,
+            rows.append({"axis": axis, "value": float(value), "quantity": q, "n_seeds": len(x), "mean": mean_x,
+                         "se": se_x, "n_base_seeds": len(y), "base_mean": mean_y, "base_se": se_y,
                          "difference": float(diff), "z": z})
     return pd.DataFrame(rows, columns=cols)
+
+
+def _mean_and_se(x, axial: bool):
+    r"""Mean over seeds and its standard error :math:`s/\sqrt n` (NaN for one seed).
+
+    Axial angles (``axial``) are averaged on the circle (``dem_contract.axial_mean``),
+    and :math:`s` is taken from their differences to that mean modulo 180 deg
+    (``angle_difference``), so seeds on either side of 0/180 are close.
+    """
+    n = len(x)
+    if not axial:
+        return float(x.mean()), (float(x.std(ddof=1) / np.sqrt(n)) if n > 1 else np.nan)
+    mean = float(axial_mean(x))
+    dev = angle_difference(x, mean)
+    return mean, (float(np.sqrt(np.sum(dev**2) / (n - 1) / n)) if n > 1 else np.nan)
 
 
 def cheapest_within_tolerance(table: pd.DataFrame) -> dict:

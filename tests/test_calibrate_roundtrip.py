@@ -21,6 +21,7 @@ import pytest
 import yaml
 
 from calibrate import pipeline, route2, synthetic
+from dem_contract import angle_difference, fabric_angle_deg, fabric_norm
 from calibrate.io import read_cases
 from calibrate.smoothing import smooth_cases
 from calibrate.backsolve import BacksolveSettings
@@ -55,8 +56,7 @@ def test_dem_noise_round_trip_recovers_what_the_data_determine(dem_noise_run):
     assert rel(m1.a1, TRUTH_M1["a1"]) < 0.07
     fa, fb, _ = steady_state(fitted)
     assert rel(np.hypot(fa, fb), np.hypot(a, b)) < 0.05
-    th = lambda a, b: np.degrees(0.5 * np.arctan2(b, a)) % 180  # noqa: E731
-    assert abs(th(fa, fb) - th(a, b)) < 1.6
+    assert abs(angle_difference(fabric_angle_deg(fa, fb), fabric_angle_deg(a, b))) < 1.6
 
 
 def test_X_c_lies_beyond_every_state_a_calibration_reversal_starts_from(dem_noise_run):
@@ -75,8 +75,8 @@ def test_dem_noise_round_trip_friction_and_curves(dem_noise_run):
     s = route2.Route2Settings()
     true_curves = route2.replay_run(truth_params(), reps[0], "model1", "eq2", s)
     fit_curves = route2.replay_run(p, reps[0], "model1", "eq2", s)
-    nA = lambda m: np.sqrt(2 * (m[:, 0] ** 2 + m[:, 1] ** 2))  # noqa: E731
-    assert np.sqrt(np.mean((nA(true_curves) - nA(fit_curves)) ** 2)) < 0.003
+    dA = fabric_norm(true_curves[:, 0], true_curves[:, 1]) - fabric_norm(fit_curves[:, 0], fit_curves[:, 1])
+    assert np.sqrt(np.mean(dA**2)) < 0.003
 
 
 def test_outputs_hold_values_intervals_and_provenance(dem_noise_run):

@@ -16,6 +16,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from dem_contract import fabric_angle_deg, fabric_norm
+
 ROOT = Path(__file__).resolve().parents[1]
 YS = ROOT / "yade_scripts"
 RUN = YS / "run_stage.py"
@@ -44,7 +46,7 @@ def read(path):
 
 
 def fabric(a, b):
-    return np.sqrt(2 * (a * a + b * b)), np.degrees(np.arctan2(b, a) / 2) % 180
+    return fabric_norm(a, b), fabric_angle_deg(a, b)
 
 
 @pytest.fixture(scope="module")

@@ -298,14 +298,6 @@ def test_missing_run_is_named(study, tmp_path, capsys):
     assert "missing" in err and str(tmp_path / point) in err                      # ... and the file it lacks
 
 
-def test_angle_differences_wrap_at_180_degrees():
-    assert analysis.angle_difference(179.0, 1.0) == pytest.approx(-2.0)
-    assert analysis.angle_difference(1.0, 179.0) == pytest.approx(2.0)
-    a, b = A_components(0.1, 170.0)
-    norm, theta = analysis.fabric_norm_angle(a, b)
-    assert norm == pytest.approx(0.1) and theta == pytest.approx(170.0)
-
-
 # --- repeats: a setting run with every seed -------------------------------------
 
 def test_repeated_value_runs_with_every_seed_and_must_be_on_the_grid():

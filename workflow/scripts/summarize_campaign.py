@@ -1,34 +1,44 @@
 """One table of the DEM campaign: a row per case, from the sidecars and the pre-shear.
 
-Called by the Snakemake rule `dem_summary`. Steady values are means over the
-last third of the pre-shear strain (DESIGN.md: steady by strain 1).
+Called by the Snakemake rule `dem_summary`. The files are read through the
+contract's readers and the steady values are ``dem_contract.steady_values``
+(the last half of the pre-shear strain), the same numbers the calibration
+takes for each run.
 """
-import json
+import sys
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-STEADY_FRACTION = 1 / 3  # last third of the pre-shear
+sys.path.insert(0, str(Path(__file__).resolve().parents[2]))   # the repository (Snakemake sets __file__)
+
+from dem_contract import DEMInputError, read_series, read_sidecar, steady_values, steady_window  # noqa: E402
+
+#: The pre-shear columns the summary averages.
+SUMMARY_COLUMNS = ("t", "strain", "A_xx", "A_xy", "mu", "phi", "Z")
 
 
-def steady_values(series: pd.DataFrame) -> dict:
-    """Mean mu, |A|, theta_A, phi, Z over the last third of a pre-shear."""
-    s = series["strain"]
-    tail = series[s >= s.iloc[0] + (1 - STEADY_FRACTION) * (s.iloc[-1] - s.iloc[0])]
-    a, b = tail["A_xx"].mean(), tail["A_xy"].mean()
+def steady_row(series: pd.DataFrame) -> dict:
+    """Steady mu (and its standard deviation over the window), |A|, theta_A, phi, Z of a pre-shear."""
+    st = steady_values(series)
+    mu = series["mu"].to_numpy()[steady_window(series["strain"].to_numpy())]
     return {
-        "mu_steady": tail["mu"].mean(),
-        "mu_std": tail["mu"].std(),
-        "A_norm_steady": float(np.sqrt(2 * (a**2 + b**2))),
-        "theta_A_steady_deg": float(np.mod(np.degrees(0.5 * np.arctan2(b, a)), 180)),
-        "phi_steady": tail["phi"].mean(),
-        "Z_steady": tail["Z"].mean(),
+        "mu_steady": st["mu"],
+        "mu_std": float(np.std(mu, ddof=1)),
+        "A_norm_steady": st["A_norm"],
+        "theta_A_steady_deg": st["theta_A"],
+        "phi_steady": st["phi"],
+        "Z_steady": st["Z"],
     }
 
 
 def case_row(label: str, case: dict, case_dir: Path, stages: list[str]) -> dict:
-    sidecars = {stage: json.loads((case_dir / f"{stage}.json").read_text()) for stage in stages}
+    sidecars = {}
+    for stage in stages:
+        sidecars[stage] = read_sidecar(case_dir / f"{stage}.csv")
+        if not sidecars[stage]:
+            raise DEMInputError(f"{case_dir / f'{stage}.json'}: sidecar not found")
     pre = sidecars["preshear"]
     row = {"case": label, **case, "N": pre["N"], "kappa_achieved": pre["kappa_achieved"],
            "inertial_number_achieved": pre["inertial_number_achieved"],
@@ -36,7 +46,7 @@ def case_row(label: str, case: dict, case_dir: Path, stages: list[str]) -> dict:
     for stage, side in sidecars.items():
         row[f"wall_time_s_{stage}"] = side["wall_time_s"]
     row["particle_steps_per_s"] = pre["particle_steps_per_s"]
-    row.update(steady_values(pd.read_csv(case_dir / "preshear.csv")))
+    row.update(steady_row(read_series(case_dir / "preshear.csv", SUMMARY_COLUMNS, what="the pre-shear of the case")))
     return row
 
 
