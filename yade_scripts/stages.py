@@ -421,7 +421,8 @@ class Stage:
         _atomic_json(self.resume_path, dict(checkpoint=name, rows=st["rows"], iter=O.iter,
                                             scene_sha256=self.hash))
         self.last_checkpoint = now
-        print(f"[{self.stage}] checkpoint at iteration {O.iter} ({st['rows']} rows)", flush=True)
+        print(f"[{self.stage}] checkpoint at iteration {O.iter} ({st['rows']} rows, "
+              f"written in {time.time() - now:.2f} s)", flush=True)
 
     # ------------------------------------------------------------------- run
     def run(self, lock=None):
