@@ -16,6 +16,7 @@ import builtins
 import json
 import math
 import os
+import re
 import shutil
 import signal
 import time
@@ -489,8 +490,14 @@ class Stage:
               f"{side['wall_time_s']:.1f} s, {side['particle_steps_per_s']:.3g} particle-steps/s", flush=True)
 
     def _remove_work_files(self):
-        """Remove this stage's own work files, then its folder if nothing else is in it."""
-        for name in ("ckpt_a.yade.gz", "ckpt_b.yade.gz", "resume.json", "resume.json.tmp"):
+        """Remove this stage's own work files, then its folder if nothing else is in it.
+
+        Own files: the checkpoints, resume.json and the temporary saves of save_state
+        (`tmp<pid>_*.yade.gz`, left behind only by a process killed while saving).
+        """
+        names = ["ckpt_a.yade.gz", "ckpt_b.yade.gz", "resume.json", "resume.json.tmp"]
+        names += [n for n in os.listdir(self.partial) if re.fullmatch(r"tmp\d+_.*\.yade\.gz", n)]
+        for name in names:
             try:
                 os.remove(os.path.join(self.partial, name))
             except FileNotFoundError:
