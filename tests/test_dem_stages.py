@@ -207,6 +207,7 @@ def test_killed_stage_resumes_without_gap_or_duplicate(case, tmp_path):
     r = yade(RUN, scene, "preshear", cdir)
     assert r.returncode == 0, r.stderr[-2000:]
     assert "resumed from" in r.stdout
+    assert f"stale lock of PID {proc.pid} on host" in r.stdout  # SIGKILL left the lock file behind
     side = json.loads((cdir / "preshear.json").read_text())
     assert side["resumed"] == 1
     s = read(cdir / "preshear.csv")

@@ -39,9 +39,6 @@ class Bulk:
         self.area = math.pi * r**2  # disk areas
         self.vol3 = 4.0 / 3.0 * math.pi * r**3  # bodyStressTensors divides by the sphere volume
 
-    def band(self, y_bot, y_top, excl):
-        return y_bot + excl, y_top - excl
-
     def measure(self, lay, y_lo, y_hi, W):
         N, d = self.N, self.d
         lo, hi = Vector3(-BIG, y_lo, -BIG), Vector3(BIG, y_hi, BIG)

@@ -1,7 +1,9 @@
 """Entry point: yade -n -x yade_scripts/run_stage.py <scene.json> <stage> <case_dir>
 
 Runs one stage (pack, preshear, heaviside, sinusoidal) of one case; see docs/scene.md.
-Exit codes: 0 done, 1 unexpected error, 2 bad scene or missing input, 3 guard fired.
+Exit codes: 0 done, 1 unexpected error, 2 bad scene or missing input, 3 guard fired,
+4 interrupted by SIGTERM or SIGINT (checkpoint written: rerun to resume),
+5 another live process runs this stage of this case (nothing touched).
 """
 import os
 import sys
@@ -10,6 +12,7 @@ import sys
 sys.path.insert(0, os.path.dirname(os.path.abspath(sys.argv[0])))
 
 import scene as scenemod  # noqa: E402
+import stagelock  # noqa: E402
 
 USAGE = "usage: yade -n -x yade_scripts/run_stage.py <scene.json> <pack|preshear|heaviside|sinusoidal> <case_dir>"
 
@@ -26,16 +29,28 @@ def main(argv):
         return 2
     import stages  # YADE imports only once the scene is known to be good
 
+    stages.install_signal_handlers()
+    lock = stagelock.StageLock(case_dir, stage, log=lambda line: print(line, flush=True))
+    try:
+        lock.acquire()
+    except stagelock.Busy as e:
+        print(f"busy: {e}", file=sys.stderr)
+        return 5
     try:
         st = stages.Stage(scene, sha, stage, case_dir)
         st.prepare()
-        st.run()
+        st.run(lock)
     except stages.InputError as e:
         print(f"input error: {e}", file=sys.stderr)
         return 2
     except stages.GuardError as e:
         print(f"guard: {e}", file=sys.stderr)
         return 3
+    except stages.Interrupted as e:
+        print(f"interrupted: {e}", file=sys.stderr)
+        return 4
+    finally:
+        lock.release()
     return 0
 
 

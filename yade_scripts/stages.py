@@ -2,15 +2,23 @@
 
 One controller per process. It runs inside a PyRunner at the sampling interval:
 writes one CSV row, checks the guards, prints progress and, every
-run.checkpoint_every_s, saves a checkpoint. Its state lives in O.tags so that a
+run.checkpoint_every_s, asks for a checkpoint. Its state lives in O.tags so that a
 checkpoint carries it and a killed stage resumes exactly at its last checkpoint.
+
+The run loop advances the simulation in chunks of about CHUNK_S of wall time
+(`O.run(n, True)` stops after a whole step). Python runs signal handlers only
+between chunks (not while the main thread waits in YADE's C++), so SIGTERM and
+SIGINT (see `install_signal_handlers`) are acted on at the end of the current
+chunk: a checkpoint is written and the stage raises Interrupted (exit code 4).
+Periodic checkpoints are written at chunk ends too, never inside a step.
 """
 import builtins
 import json
 import math
 import os
+import re
 import shutil
-import sys
+import signal
 import time
 
 import numpy as np
@@ -32,6 +40,46 @@ class GuardError(RuntimeError):
 
 class InputError(RuntimeError):
     """A missing or mismatched input: exit code 2."""
+
+
+class Interrupted(RuntimeError):
+    """SIGTERM or SIGINT: a checkpoint was written, exit code 4; rerun to resume."""
+
+
+CHUNK_S = 1.0  # wall time of one O.run chunk: the longest wait between a signal and its checkpoint
+SIGNALS = []  # (signal number, time.time() when Python ran the handler) of each SIGTERM/SIGINT
+
+
+def _on_signal(signum, frame):
+    SIGNALS.append((signum, time.time()))
+
+
+def install_signal_handlers():
+    """SIGTERM and SIGINT only record themselves; the run loop checkpoints and stops.
+
+    A SIGINT ignored by the parent (a background job of a non-interactive shell)
+    stays ignored.
+    """
+    signal.signal(signal.SIGTERM, _on_signal)
+    if signal.getsignal(signal.SIGINT) is not signal.SIG_IGN:
+        signal.signal(signal.SIGINT, _on_signal)
+
+
+def save_state(path):
+    """O.save into an existing folder, through a temporary name.
+
+    YADE 2023.02a's O.save into a missing folder does not fail but loops (for
+    a large scene): the folder is created and checked first.
+    """
+    folder = os.path.dirname(path)
+    os.makedirs(folder, exist_ok=True)
+    if not os.path.isdir(folder):
+        raise RuntimeError(f"cannot save {path}: {folder} is not a folder")
+    tmp = os.path.join(folder, f"tmp{os.getpid()}_" + os.path.basename(path))  # keeps the .yade.gz suffix
+    O.save(tmp)
+    if not os.path.isfile(tmp):
+        raise RuntimeError(f"O.save did not write {tmp}")
+    os.replace(tmp, path)
 
 
 def _atomic_json(path, obj):
@@ -71,8 +119,11 @@ class Stage:
             if resume.get("scene_sha256") != self.hash:
                 print(f"[{self.stage}] partial run from another scene: discarded", flush=True)
                 resume = None
+            elif not self._csv_has_rows(resume["rows"]):
+                print(f"[{self.stage}] partial CSV shorter than its checkpoint: discarded", flush=True)
+                resume = None
         if resume is None:
-            shutil.rmtree(self.partial, ignore_errors=True)
+            shutil.rmtree(self.partial, ignore_errors=True)  # this process owns the stage (see stagelock)
             os.makedirs(self.partial)
             self.start_fresh()
             self.st["resumed"] = 0
@@ -100,6 +151,13 @@ class Stage:
 
     def columns(self):
         return measure.COLUMNS + (["ke", "wall_speed", "load"] if self.stage == "pack" else [])
+
+    def _csv_has_rows(self, rows):
+        if not os.path.isfile(self.csv_path):
+            return False
+        with open(self.csv_path) as f:
+            n = sum(1 for line in f if line.endswith("\n"))
+        return n >= rows + 1
 
     def _truncate_csv(self, rows):
         with open(self.csv_path) as f:
@@ -169,7 +227,8 @@ class Stage:
         builtins._ys_sample = self.sample
         builtins._ys_wall = self.wall_speed
         every = st["every"]
-        if self.stage != "pack" and O.iter >= st["fine_end"]:
+        # the sampler turns coarse right after the first sample at or past fine_end
+        if self.stage != "pack" and st["last_sample_iter"] >= st["fine_end"]:
             every = st["coarse_every"]
         remaining_transition = 0
         if self.stage == "sinusoidal":
@@ -179,7 +238,7 @@ class Stage:
         sampler = O.engines[-1]
         # PeriodicEngine keeps the in-step iteration (one less than the state it sees);
         # the grid of samples goes on from the last row (O.pause may act a step late)
-        last = st["last_sample_iter"] if st["last_sample_iter"] >= 0 else O.iter
+        last = st["last_sample_iter"] if st["last_sample_iter"] >= 0 else st["iter0"]
         sampler.iterLast = last - 1
         sampler.nDone = 1  # else PeriodicEngine's first call resets iterLast to the current iteration
         self.sampler = sampler
@@ -263,9 +322,8 @@ class Stage:
         if now - self.last_progress >= sc["run"]["progress_every_s"]:
             self.progress(now)
         if now - self.last_checkpoint >= sc["run"]["checkpoint_every_s"] and not self.done:
-            # saved between steps (a state saved inside a step would be labelled one step early)
+            # saved at the end of the current chunk, between steps
             self.want_checkpoint = True
-            O.pause()
 
     def _ke_mean(self):
         """Mean squared grain velocity (translation only: a free rattler may spin for ever), in p/rho."""
@@ -360,28 +418,43 @@ class Stage:
         name = "ckpt_a.yade.gz" if st.get("ckpt") != "ckpt_a.yade.gz" else "ckpt_b.yade.gz"
         st["ckpt"] = name
         O.tags["ys_state"] = json.dumps(st)
-        O.save(os.path.join(self.partial, name))
+        save_state(os.path.join(self.partial, name))
         _atomic_json(self.resume_path, dict(checkpoint=name, rows=st["rows"], iter=O.iter,
                                             scene_sha256=self.hash))
         self.last_checkpoint = now
-        print(f"[{self.stage}] checkpoint at iteration {O.iter} ({st['rows']} rows)", flush=True)
+        print(f"[{self.stage}] checkpoint at iteration {O.iter} ({st['rows']} rows, "
+              f"written in {time.time() - now:.2f} s)", flush=True)
 
     # ------------------------------------------------------------------- run
-    def run(self):
+    def run(self, lock=None):
+        """Step to the end in chunks; checkpoint when due or on a signal.
+
+        `lock` (a stagelock.StageLock) is renewed after every chunk.
+        """
         st = self.st
         # no row at the start itself: contact forces are not saved with a state, so the
         # first row comes one sampling interval in (the sidecar has the start's t and strain)
+        chunk = 10  # steps; then sized from the measured rate to about CHUNK_S
         while True:
             remaining = st["n_steps"] - (O.iter - st["iter0"])
             if remaining <= 0 or self.done:
-                break
-            O.run(remaining, True)
+                break  # a signal arriving now is ignored: the stage completes
+            if SIGNALS:
+                self.interrupt()
+            n = min(remaining, chunk)
+            i0, w0 = O.iter, time.time()
+            O.run(n, True)
             if self.error is not None:
                 raise self.error
-            if self.want_checkpoint:
+            elapsed = time.time() - w0
+            if O.iter > i0:
+                chunk = max(1, min(10 * chunk, int((O.iter - i0) * CHUNK_S / max(elapsed, 1e-3))))
+            if lock is not None:
+                lock.touch()
+            if self.want_checkpoint and not self.done:
                 self.want_checkpoint = False
                 self.checkpoint()
-            elif O.iter - st["iter0"] < st["n_steps"] and not self.done:
+            if O.iter - i0 < n and not self.done:
                 raise RuntimeError(f"the run stopped early at iteration {O.iter}")
         if self.stage == "pack" and not self.done:
             raise GuardError(f"packing not converged within pack.max_time = {self.scene['pack']['max_time']:g} "
@@ -390,6 +463,13 @@ class Stage:
         if self.error is not None:
             raise self.error
         self.finish()
+
+    def interrupt(self):
+        """A signal arrived: checkpoint now (between steps), then raise Interrupted."""
+        self.checkpoint()
+        name = signal.Signals(SIGNALS[0][0]).name
+        raise Interrupted(f"{name} received: checkpoint at iteration {O.iter} ({self.st['rows']} rows) "
+                          f"written in {self.partial}; run the same command again to resume")
 
     def finish(self):
         st, der, sc = self.st, self.der, self.scene
@@ -400,18 +480,32 @@ class Stage:
         st["cpu_time"] = st.get("cpu_time", 0.0) + time.process_time() - self.cpu0
         O.tags["ys_state"] = json.dumps(st)
         final_tmp = os.path.join(self.partial, "final.yade.gz")
-        O.save(final_tmp)
+        save_state(final_tmp)
         side = self.sidecar()
         os.replace(final_tmp, os.path.join(self.case_dir, f"{self.stage}.final.yade.gz"))
         os.replace(self.csv_path, os.path.join(self.case_dir, f"{self.stage}.csv"))
         _atomic_json(os.path.join(self.case_dir, f"{self.stage}.json"), side)
-        shutil.rmtree(self.partial, ignore_errors=True)
-        try:
-            os.rmdir(os.path.join(self.case_dir, ".partial"))
-        except OSError:
-            pass
+        self._remove_work_files()
         print(f"[{self.stage}] done: {st['rows']} samples, {O.iter - st['iter0']} steps, "
               f"{side['wall_time_s']:.1f} s, {side['particle_steps_per_s']:.3g} particle-steps/s", flush=True)
+
+    def _remove_work_files(self):
+        """Remove this stage's own work files, then its folder if nothing else is in it.
+
+        Own files: the checkpoints, resume.json and the temporary saves of save_state
+        (`tmp<pid>_*.yade.gz`, left behind only by a process killed while saving).
+        """
+        names = ["ckpt_a.yade.gz", "ckpt_b.yade.gz", "resume.json", "resume.json.tmp"]
+        names += [n for n in os.listdir(self.partial) if re.fullmatch(r"tmp\d+_.*\.yade\.gz", n)]
+        for name in names:
+            try:
+                os.remove(os.path.join(self.partial, name))
+            except FileNotFoundError:
+                pass
+        try:
+            os.rmdir(self.partial)
+        except OSError as e:
+            print(f"[{self.stage}] {self.partial} left in place: {e}", flush=True)
 
     def sidecar(self):
         st, der, sc = self.st, self.der, self.scene
