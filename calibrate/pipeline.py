@@ -15,6 +15,9 @@ from model import default_params, params_from_dict, steady_state
 from . import backsolve, bootstrap, figures, fits, io, route1, route2, smoothing, tables
 
 BLOCKS = ("friction_eq2", "friction_quadratic", "model1", "model2")
+#: Fewest seeds per ensemble for bootstrap intervals worth the name; below it the calibration warns.
+MIN_SEEDS = 3
+SCORES = ("score", "rms_A_norm", "rms_theta_A", "rms_mu")
 
 
 @dataclass
@@ -199,22 +202,69 @@ def score_routes(replays, heldout, r1, r2, doc1, doc2, settings: Settings):
             ins = route2.score(params_from_dict(doc), replays, model, settings.route2, sigma_mu)
             ins_scores[route] = ins["score"]
             h = heldout[(heldout["route"] == route) & (heldout["model"] == model)] if len(heldout) else heldout
-            h_score = float(h["score"].replace(np.inf, 1e300).mean()) if len(h) else math.nan
             fr = (r1[model] if route == "backsolve" else r2[model])
-            quality.append({"model": model, "route": route, "insample_score": ins["score"],
-                            "insample_rms_A_norm": ins["rms_A_norm"], "insample_rms_theta_A": ins["rms_theta_A"],
-                            "insample_rms_mu": ins["rms_mu"], "heldout_score": h_score,
-                            "heldout_rms_A_norm": float(h["rms_A_norm"].mean()) if len(h) else math.nan,
-                            "heldout_rms_theta_A": float(h["rms_theta_A"].mean()) if len(h) else math.nan,
-                            "heldout_rms_mu": float(h["rms_mu"].mean()) if len(h) else math.nan,
-                            "heldout_replicates": len(h), "fit_cost": fr.cost, "fit_message": fr.message,
+            quality.append({"model": model, "route": route,
+                            **{f"insample_{k}": ins[k] if np.isfinite(ins[k]) else math.nan for k in SCORES},
+                            **heldout_means(h), "fit_cost": fr.cost, "fit_message": fr.message,
                             "n_samples": n_used if route == "backsolve" else fr.n_data // 3,
-                            "n_bins": int(r1["bins"]["used"].sum()) if route == "backsolve" else math.nan})
+                            "n_bins": int(r1["bins"]["used"].sum()) if route == "backsolve" else math.nan,
+                            "score_note": score_note(ins, h)})
         default_route[model] = choose_route(heldout[heldout["model"] == model] if len(heldout) else heldout,
                                             ins_scores)
     for q in quality:
         q["default"] = default_route[q["model"]] == q["route"]
     return quality, default_route
+
+
+def heldout_means(h: pd.DataFrame) -> dict:
+    """Held-out columns of one (model, route): means over the replicates whose held-out runs could be integrated.
+
+    ``heldout_replicates`` counts the replicates that held a seed out,
+    ``heldout_failed`` those whose parameters could not be integrated on it
+    (their scores are ``inf`` in ``bootstrap.run``'s table): they are left out
+    of the means, which are NaN when no replicate is left (``score_note`` says why).
+    """
+    ok = h[np.isfinite(h["score"])] if len(h) else h
+    out = {f"heldout_{k}": float(ok[k].mean()) if len(ok) else math.nan for k in SCORES}
+    out.update(heldout_replicates=len(h), heldout_failed=len(h) - len(ok))
+    return out
+
+
+def score_note(ins: dict, h: pd.DataFrame) -> str:
+    """Why a score of ``fit_quality.csv`` is NaN, or rests on fewer replicates than drawn ("" if neither)."""
+    notes = []
+    if not np.isfinite(ins["score"]):
+        notes.append(f"in-sample scores NaN: the fitted parameters cannot be integrated on the calibration runs "
+                     f"({ins.get('failure', '')})")
+    if not len(h):
+        notes.append("held-out scores NaN: no bootstrap replicate held a seed out (one seed per ensemble, "
+                     "or no replicates)")
+    else:
+        failed = h[~np.isfinite(h["score"])]
+        if len(failed) == len(h):
+            notes.append(f"held-out scores NaN: no replicate's parameters could be integrated on its held-out "
+                         f"runs ({failed['failure'].iloc[0]})")
+        elif len(failed):
+            notes.append(f"held-out scores average {len(h) - len(failed)} of {len(h)} replicates: the other "
+                         f"{len(failed)} could not be integrated on their held-out runs ({failed['failure'].iloc[0]})")
+    return "; ".join(notes)
+
+
+def seed_warning(cases) -> str:
+    """A warning when an ensemble has fewer than ``MIN_SEEDS`` seeds ("" otherwise).
+
+    The bootstrap resamples seeds: with one seed every replicate is the same
+    and the intervals have zero width; with two they take three values.
+    """
+    counts = {}
+    for c in cases:
+        counts[c.group] = counts.get(c.group, 0) + 1
+    few = {g: n for g, n in sorted(counts.items()) if n < MIN_SEEDS}
+    if not few:
+        return ""
+    listed = ", ".join(f"{g} ({n} seed{'s' if n > 1 else ''})" for g, n in few.items())
+    return (f"bootstrap intervals rest on fewer than {MIN_SEEDS} seeds per ensemble: {listed}; they understate "
+            f"the uncertainty (zero width with one seed)")
 
 
 def final_document(doc1, doc2, default_route) -> dict:
@@ -299,8 +349,8 @@ def write_tables(out: Path, final, ptab, btab, quality, heldout, values) -> None
     tables.write_csv(ptab, out / "params_table.csv")
     tables.write_csv(btab, out / "backsolve_alpha_vs_X.csv")
     tables.write_csv(pd.DataFrame(quality), out / "fit_quality.csv")
-    if len(heldout):
-        tables.write_csv(heldout, out / "heldout_scores.csv")
+    if len(heldout):  # a failed replicate: NaN scores, the reason in 'failure'
+        tables.write_csv(heldout.replace([np.inf, -np.inf], np.nan), out / "heldout_scores.csv")
     tables.write_csv(values, out / "bootstrap_values.csv")
 
 
@@ -337,6 +387,9 @@ def run(case_dirs, out, settings: Settings = Settings(), log=print, argv=None) -
     out.mkdir(parents=True, exist_ok=True)
     cases = read_inputs(case_dirs, settings)
     log(f"read {len(cases)} case(s): {', '.join(c.name for c in cases)}")
+    warning = seed_warning(cases)
+    if warning:
+        log(f"warning: {warning}")
     samples, steady = smooth(cases, settings)
     friction = fit_friction(samples, steady, settings)
     r1, doc1 = fit_route1(samples, steady, friction, settings)
@@ -349,6 +402,8 @@ def run(case_dirs, out, settings: Settings = Settings(), log=print, argv=None) -
     xc_bound = xc_lower_bounds(r1, steady, settings)
     compare_steady(quality, final, doc1, doc2, steady, xc_bound)
     quality += friction_quality(r1)
+    for q in quality:
+        q["warning"] = warning
     ptab = parameter_table(doc1, doc2, iv, default_route, xc_bound)
     final["intervals"] = default_intervals(ptab)
     final["provenance"] = provenance(cases, default_route, steady, settings, argv)

@@ -257,9 +257,11 @@ def fit(replays, base_params: dict, model: str, start: dict, steady: dict, sigma
 def score(params, replays, model: str, settings: Route2Settings, sigma_mu: float) -> dict:
     """Prediction error of ``params`` on ``replays`` (e.g. held-out seeds).
 
-    Returns RMS of |A|, theta_A (degrees, wrapped), mu, and ``score`` = RMS of
-    the normalised residuals (the route-2 objective without the steady terms).
-    ``inf`` everywhere if the model cannot be integrated (pole, no steady state).
+    Returns RMS of |A|, theta_A (degrees, wrapped), mu, ``score`` = RMS of
+    the normalised residuals (the route-2 objective without the steady terms),
+    and ``failure``: empty, or, if the model cannot be integrated (pole,
+    diverging fabric, no steady state), the reason, with ``inf`` in every
+    number (the worst score, for comparisons; tables write NaN and the reason).
     """
     friction = "eq2" if model == "model1" else "quadratic"
     try:
@@ -276,6 +278,7 @@ def score(params, replays, model: str, settings: Route2Settings, sigma_mu: float
             dmu.append(m[:, 2] - r.mu)
         rms = lambda v: float(np.sqrt(np.mean(np.concatenate(v) ** 2)))  # noqa: E731
         return {"score": float(np.sqrt(np.mean(z**2))), "rms_A_norm": rms(dA), "rms_theta_A": rms(dth),
-                "rms_mu": rms(dmu)}
-    except (PoleError, ValueError, FloatingPointError, RuntimeError):
-        return {"score": np.inf, "rms_A_norm": np.inf, "rms_theta_A": np.inf, "rms_mu": np.inf}
+                "rms_mu": rms(dmu), "failure": ""}
+    except (PoleError, ValueError, FloatingPointError, RuntimeError) as exc:
+        reason = f"{type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''}"
+        return {"score": np.inf, "rms_A_norm": np.inf, "rms_theta_A": np.inf, "rms_mu": np.inf, "failure": reason}
