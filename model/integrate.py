@@ -213,11 +213,13 @@ def simulate(params, history: History, model="model1", A0=None, method=DEFAULT_M
         Initial fabric; default the model's steady state for the sign of the
         first non-zero shear rate (``steady_state``).
     method : {"RK4", "RK23", "RK45", "DOP853", "Radau", "BDF", "LSODA"}
-        ``"RK4"`` is the paper's fixed step; the others are scipy's.
+        ``"RK4"`` is the paper's fixed step (cut where stiff); the others are scipy's.
     rtol, atol : float
         Tolerances of the scipy methods.
     step : float, optional
         RK4 time step; default ``1e-2`` units of strain at the largest rate.
+        RK4 cuts it where Eq. 4 is stiff or X nears the pole (``model.rk4``),
+        and refuses with the step it needs if that takes too many steps.
     friction : {"eq2", "quadratic"}
         Eq. 2 or the quadratic law of [15].
     strain_eval : array, optional
@@ -290,10 +292,10 @@ def simulate(params, history: History, model="model1", A0=None, method=DEFAULT_M
                     t=s.t0, X=X_start, X_c=X_c,
                 )
         t_out = np.asarray(times[i], dtype=float)
+        xfun = _xfun(s)
         if method == "RK4":
-            Y, y1 = rk4_segment(rate, s.t0, s.t1, y, step, t_out, X_c)
+            Y, y1 = rk4_segment(rate, s.t0, s.t1, y, step, t_out, X_c, xfun)
         else:
-            xfun = _xfun(s)
             Y, y1, _ = adaptive_segment(rate, s.t0, s.t1, y, method, rtol, atol, t_out, X_c, xfun,
                                            max_steps=max_steps)
         y = np.asarray(y1, dtype=float)
