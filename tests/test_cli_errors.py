@@ -33,6 +33,16 @@ def inputs(tmp_path_factory):
     (d / "cut_table.csv").write_text("t,gammadot\n0,1\n1,1\n2,\n")
     (d / "no_rate.csv").write_text("t,rate\n0,1\n1,1\n")
     (d / "points.csv").write_text("point,axis\nbase_s1,\n")
+    from dem_contract.synthetic import write_case
+    import pandas as pd
+    for name, column, row, value in (("fabric_50", "A_xy", 40, 50.0), ("strain_jump", "strain", 40, None)):
+        case = write_case(d / f"{name}_s1", default_params(), protocols=("heaviside",))
+        run = pd.read_csv(case / "heaviside.csv")
+        if value is None:
+            run.loc[row:, column] += 0.3    # a strain jump of 0.3 between data rows 40 and 41
+        else:
+            run.loc[row, column] = value    # data row 41
+        run.to_csv(case / "heaviside.csv", index=False)
     return d
 
 
@@ -62,6 +72,12 @@ CASES = [
      ["absent_case", "not found"]),
     ("calibrate: DEM dir without runs", ["-m", "calibrate", "--dem", "{d}/a_directory", "--out", "{d}/cal"],
      ["a_directory/preshear.csv", "not found"]),
+    ("calibrate: one row with A_xy = 50",
+     ["-m", "calibrate", "--dem", "{d}/fabric_50_s1", "--protocols", "heaviside", "--out", "{d}/cal"],
+     ["fabric_50_s1/heaviside.csv", "'A_xy' = 50 at data row 41", "[-0.5, 0.5]"]),
+    ("calibrate: a strain jump inside a run",
+     ["-m", "calibrate", "--dem", "{d}/strain_jump_s1", "--protocols", "heaviside", "--out", "{d}/cal"],
+     ["strain_jump_s1/heaviside.csv", "strain jumps", "data rows 40 and 41"]),
     ("calibrate: --out under a file", ["-m", "calibrate", "--dem", "{d}/a_directory", "--out", "{d}/a_file/cal"],
      ["a_file/cal"]),
     ("compare: malformed params YAML gives file and line",
