@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
 from . import backsolve, io, route2, smoothing
 from .pipeline import Settings, run
@@ -48,6 +49,7 @@ def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     a = parser().parse_args(argv)
     try:
+        Path(a.out).mkdir(parents=True, exist_ok=True)  # before any work: a bad --out fails at once
         settings = Settings(
             protocols=tuple(a.protocols),
             smoothing=smoothing.SmoothingSettings(fine_window=a.sg_fine_window, coarse_window=a.sg_coarse_window,
@@ -65,6 +67,9 @@ def main(argv=None) -> int:
         return 2
     except ValueError as exc:
         print(f"calibrate: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:  # an --out that cannot be written (a file in its path, no permission, disk full)
+        print(f"calibrate: cannot write {exc.filename or a.out}: {exc.strerror or exc}", file=sys.stderr)
         return 2
     return 0
 

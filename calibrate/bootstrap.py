@@ -89,35 +89,50 @@ def run(cases, samples, steady_fn, replays, full, base_doc, settings, n_boot=20,
         except ValueError as exc:
             log(f"bootstrap replicate {k}: route 1 failed ({exc}); replicate skipped")
             continue
-        for block in BLOCKS:
-            for name, v in r1[block].values.items():
-                rows.append((k, "backsolve", block, name, v))
-        if edges is not None:
-            from .backsolve import binned
-            bb = binned(smp, settings["backsolve"], edges=edges)
-            for _, row in bb.iterrows():
-                key = f"{row.X_lo:.6g}"
-                rows += [(k, "bins", key, "alpha1", row.alpha1), (k, "bins", key, "alpha2", row.alpha2)]
-        doc1 = params_doc(base_doc, {b: r1[b].values for b in BLOCKS})
-        reps = [r for name in drawn for r in replays if r.case == name]
-        doc2 = dict(doc1)
-        for model in ("model1", "model2"):
-            f = route2.fit(reps, doc1, model, full["route2"][model].values, steady, r1["sigma_mu"], s2)
-            doc2[model] = f.values
-            for name, v in f.values.items():
-                rows.append((k, "curves", model, name, v))
-        held_reps = [r for r in replays if r.case in held]
-        if held_reps:
-            for route, doc in (("backsolve", doc1), ("curves", doc2)):
-                prm = params_from_dict(doc, source=f"bootstrap {k} {route}")
-                for model in ("model1", "model2"):
-                    sc = route2.score(prm, held_reps, model, settings["route2"], r1["sigma_mu"])
-                    held_rows.append({"replicate": k, "route": route, "model": model, "n_heldout_runs": len(held_reps),
-                                      **sc})
+        doc1, doc2, fitted = _refit(k, smp, r1, drawn, replays, full, base_doc, steady, settings, s2, edges)
+        rows += fitted
+        held_rows += _heldout_scores(k, doc1, doc2, [r for r in replays if r.case in held], r1["sigma_mu"],
+                                     settings["route2"])
         log(f"bootstrap replicate {k + 1}/{n_boot}: drawn {len(drawn)} seeds, held out {len(held)}")
     values = pd.DataFrame(rows, columns=["replicate", "route", "block", "parameter", "value"])
     heldout = pd.DataFrame(held_rows)
     return values, heldout
+
+
+def _refit(k, smp, r1, drawn, replays, full, base_doc, steady, settings, s2, edges):
+    """One replicate's refits: route-1 rows, re-solved bins, route 2 warm-started from the full fit.
+
+    Returns the replicate's route-1 and route-2 parameter documents and its
+    ``values`` rows (replicate, route, block, parameter, value).
+    """
+    rows = [(k, "backsolve", block, name, v) for block in BLOCKS for name, v in r1[block].values.items()]
+    if edges is not None:
+        from .backsolve import binned
+        bb = binned(smp, settings["backsolve"], edges=edges)
+        for _, row in bb.iterrows():
+            key = f"{row.X_lo:.6g}"
+            rows += [(k, "bins", key, "alpha1", row.alpha1), (k, "bins", key, "alpha2", row.alpha2)]
+    doc1 = params_doc(base_doc, {b: r1[b].values for b in BLOCKS})
+    reps = [r for name in drawn for r in replays if r.case == name]
+    doc2 = dict(doc1)
+    for model in ("model1", "model2"):
+        f = route2.fit(reps, doc1, model, full["route2"][model].values, steady, r1["sigma_mu"], s2)
+        doc2[model] = f.values
+        rows += [(k, "curves", model, name, v) for name, v in f.values.items()]
+    return doc1, doc2, rows
+
+
+def _heldout_scores(k, doc1, doc2, held_reps, sigma_mu, settings_route2) -> list:
+    """Scores of one replicate's routes on its held-out runs (none if every seed was drawn)."""
+    out = []
+    if not held_reps:
+        return out
+    for route, doc in (("backsolve", doc1), ("curves", doc2)):
+        prm = params_from_dict(doc, source=f"bootstrap {k} {route}")
+        for model in ("model1", "model2"):
+            sc = route2.score(prm, held_reps, model, settings_route2, sigma_mu)
+            out.append({"replicate": k, "route": route, "model": model, "n_heldout_runs": len(held_reps), **sc})
+    return out
 
 
 def intervals(values: pd.DataFrame, level=0.95) -> pd.DataFrame:

@@ -15,6 +15,9 @@ from model import default_params, params_from_dict, steady_state
 from . import backsolve, bootstrap, figures, fits, io, route1, route2, smoothing, tables
 
 BLOCKS = ("friction_eq2", "friction_quadratic", "model1", "model2")
+#: Fewest seeds per ensemble for bootstrap intervals worth the name; below it the calibration warns.
+MIN_SEEDS = 3
+SCORES = ("score", "rms_A_norm", "rms_theta_A", "rms_mu")
 
 
 @dataclass
@@ -81,8 +84,8 @@ def choose_route(heldout: pd.DataFrame, insample: dict) -> str:
     return "backsolve" if insample["backsolve"] < insample["curves"] else "curves"
 
 
-def steady_check(doc, steady) -> dict:
-    """Steady state implied by each model block (``model.steady_state``) against the DEM's."""
+def steady_check(doc) -> dict:
+    """Steady state implied by each model block of ``doc`` (``model.steady_state``): |A|, theta_A, X or an error."""
     out = {}
     prm = params_from_dict(doc)
     for model in ("model1", "model2"):
@@ -95,52 +98,102 @@ def steady_check(doc, steady) -> dict:
     return out
 
 
-def run(case_dirs, out, settings: Settings = Settings(), log=print, argv=None) -> dict:
-    """Calibrate on ``case_dirs`` and write every output under ``out``. Returns a summary dict."""
-    t0 = time.time()
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    cases = io.read_cases(case_dirs, settings.protocols, settings.min_samples)
-    by_name = {c.name: c for c in cases}
-    log(f"read {len(cases)} case(s): {', '.join(by_name)}")
-    samples = smoothing.smooth_cases(cases, settings.smoothing)
-    steady = io.steady_values(cases)
-    bs = settings.backsolve
+# --------------------------------------------------------------------------- the steps of ``run``
 
-    # route 1
-    r1 = route1.run_route1(samples, steady, bs, settings.steady_weight, settings.xc_margin)
-    sigma_mu = r1["sigma_mu"]
+
+def read_inputs(case_dirs, settings: Settings) -> list:
+    """Step 1, read: the case directories, checked (``io.read_cases``)."""
+    return io.read_cases(case_dirs, settings.protocols, settings.min_samples)
+
+
+def smooth(cases, settings: Settings):
+    """Step 2, smooth: the smoothed samples of every run and the ensemble steady state of the pre-shears."""
+    return smoothing.smooth_cases(cases, settings.smoothing), io.steady_values(cases)
+
+
+def fit_friction(samples, steady, settings: Settings) -> dict:
+    """Step 3, fit friction: Eq. 2 and the quadratic law to mu(X) (``route1.fit_friction``)."""
+    return route1.fit_friction(samples, steady, settings.backsolve, settings.steady_weight)
+
+
+def fit_route1(samples, steady, friction: dict, settings: Settings):
+    """Step 4, route 1: back-solve and fit both models to alpha(X); the route-1 parameter document.
+
+    Returns
+    -------
+    r1 : dict
+        ``friction`` merged with ``route1.fit_coefficients`` (the layout of ``route1.run_route1``).
+    doc1 : dict
+        A full parameter document holding every route-1 block (range-checked).
+    """
+    r1 = dict(friction)
+    r1.update(route1.fit_coefficients(samples, steady, settings.backsolve, settings.steady_weight,
+                                      settings.xc_margin))
     doc1 = default_params().to_dict()
     doc1.pop("provenance", None)
     for b in BLOCKS:
         doc1[b] = r1[b].values
     params_from_dict(doc1, source="route-1 fit")  # range check
-    log(f"route 1 done ({time.time() - t0:.1f} s): {int(r1['bins']['used'].sum())} of {len(r1['bins'])} bins used")
+    return r1, doc1
 
-    # route 2
-    replays = route2.prepare(cases, samples, bs)
-    r2 = {}
-    doc2 = dict(doc1)
+
+def fit_route2(cases, samples, steady, r1, doc1, settings: Settings, log):
+    """Step 5, route 2: each model fitted to the DEM curves from its best start.
+
+    Returns
+    -------
+    replays : list of route2.Replay
+    r2 : dict
+        model -> ``fits.FitResult``.
+    doc2 : dict
+        ``doc1`` with the route-2 model blocks.
+    """
+    t0 = time.time()
+    replays = route2.prepare(cases, samples, settings.backsolve)
+    r2, doc2 = {}, dict(doc1)
     for model in ("model1", "model2"):
-        start = _route2_start(replays, doc1, model, r1[model].values, steady, sigma_mu, settings.route2,
+        start = _route2_start(replays, doc1, model, r1[model].values, steady, r1["sigma_mu"], settings.route2,
                               settings.xc_margin)
-        r2[model] = route2.fit(replays, doc1, model, start, steady, sigma_mu, settings.route2)
+        r2[model] = route2.fit(replays, doc1, model, start, steady, r1["sigma_mu"], settings.route2)
         doc2[model] = r2[model].values
         log(f"route 2 {model}: {r2[model].extra['evaluations']} evaluations, {r2[model].message} "
-            f"({time.time() - t0:.1f} s)")
+            f"({time.time() - t0:.1f} s in route 2)")
+    return replays, r2, doc2
 
-    # bootstrap (intervals and held-out scores)
-    full = {"route1": r1, "route2": r2}
+
+def run_bootstrap(cases, samples, replays, r1, r2, doc1, settings: Settings, log):
+    """Step 6, bootstrap over seeds: replicate values, held-out scores and percentile intervals.
+
+    Returns
+    -------
+    values, heldout, intervals : DataFrame
+        ``bootstrap.run``'s two tables and ``bootstrap.intervals`` of the first
+        (empty, with its columns, when no replicate succeeded).
+    """
+    by_name = {c.name: c for c in cases}
     edges = np.append(r1["bins"]["X_lo"].to_numpy(), r1["bins"]["X_hi"].iloc[-1]) if len(r1["bins"]) else None
     values, heldout = bootstrap.run(
-        cases, samples, lambda names: io.steady_values([by_name[n] for n in names]), replays, full, doc1,
-        {"backsolve": bs, "route2": settings.route2, "steady_weight": settings.steady_weight,
+        cases, samples, lambda names: io.steady_values([by_name[n] for n in names]), replays,
+        {"route1": r1, "route2": r2}, doc1,
+        {"backsolve": settings.backsolve, "route2": settings.route2, "steady_weight": settings.steady_weight,
          "xc_margin": settings.xc_margin},
         n_boot=settings.n_boot, seed=settings.seed, boot_evals=settings.boot_evals, log=log, edges=edges)
-    iv = bootstrap.intervals(values) if len(values) else pd.DataFrame(columns=["route", "block", "parameter", "low", "high"])
-    log(f"bootstrap done ({time.time() - t0:.1f} s)")
+    iv = bootstrap.intervals(values) if len(values) else pd.DataFrame(
+        columns=["route", "block", "parameter", "low", "high"])
+    return values, heldout, iv
 
-    # scores: in-sample and held-out; choose the default route per model
+
+def score_routes(replays, heldout, r1, r2, doc1, doc2, settings: Settings):
+    """Step 7a: in-sample and held-out scores of both routes of each model, and each model's default route.
+
+    Returns
+    -------
+    quality : list of dict
+        One row per (model, route) of ``fit_quality.csv`` (the steady columns are added by ``compare_steady``).
+    default_route : dict
+        Block -> the route written to params.yaml.
+    """
+    sigma_mu = r1["sigma_mu"]
     quality, default_route = [], {"friction_eq2": "mu_vs_X", "friction_quadratic": "mu_vs_X"}
     n_used = int(r1["bins"].loc[r1["bins"]["used"], "n_samples"].sum())  # samples in the bins route 1 fits
     for model in ("model1", "model2"):
@@ -149,31 +202,91 @@ def run(case_dirs, out, settings: Settings = Settings(), log=print, argv=None) -
             ins = route2.score(params_from_dict(doc), replays, model, settings.route2, sigma_mu)
             ins_scores[route] = ins["score"]
             h = heldout[(heldout["route"] == route) & (heldout["model"] == model)] if len(heldout) else heldout
-            h_score = float(h["score"].replace(np.inf, 1e300).mean()) if len(h) else math.nan
             fr = (r1[model] if route == "backsolve" else r2[model])
-            quality.append({"model": model, "route": route, "insample_score": ins["score"],
-                            "insample_rms_A_norm": ins["rms_A_norm"], "insample_rms_theta_A": ins["rms_theta_A"],
-                            "insample_rms_mu": ins["rms_mu"], "heldout_score": h_score,
-                            "heldout_rms_A_norm": float(h["rms_A_norm"].mean()) if len(h) else math.nan,
-                            "heldout_rms_theta_A": float(h["rms_theta_A"].mean()) if len(h) else math.nan,
-                            "heldout_rms_mu": float(h["rms_mu"].mean()) if len(h) else math.nan,
-                            "heldout_replicates": len(h), "fit_cost": fr.cost, "fit_message": fr.message,
+            quality.append({"model": model, "route": route,
+                            **{f"insample_{k}": ins[k] if np.isfinite(ins[k]) else math.nan for k in SCORES},
+                            **heldout_means(h), "fit_cost": fr.cost, "fit_message": fr.message,
                             "n_samples": n_used if route == "backsolve" else fr.n_data // 3,
-                            "n_bins": int(r1["bins"]["used"].sum()) if route == "backsolve" else math.nan})
+                            "n_bins": int(r1["bins"]["used"].sum()) if route == "backsolve" else math.nan,
+                            "score_note": score_note(ins, h)})
         default_route[model] = choose_route(heldout[heldout["model"] == model] if len(heldout) else heldout,
                                             ins_scores)
     for q in quality:
         q["default"] = default_route[q["model"]] == q["route"]
+    return quality, default_route
+
+
+def heldout_means(h: pd.DataFrame) -> dict:
+    """Held-out columns of one (model, route): means over the replicates whose held-out runs could be integrated.
+
+    ``heldout_replicates`` counts the replicates that held a seed out,
+    ``heldout_failed`` those whose parameters could not be integrated on it
+    (their scores are ``inf`` in ``bootstrap.run``'s table): they are left out
+    of the means, which are NaN when no replicate is left (``score_note`` says why).
+    """
+    ok = h[np.isfinite(h["score"])] if len(h) else h
+    out = {f"heldout_{k}": float(ok[k].mean()) if len(ok) else math.nan for k in SCORES}
+    out.update(heldout_replicates=len(h), heldout_failed=len(h) - len(ok))
+    return out
+
+
+def score_note(ins: dict, h: pd.DataFrame) -> str:
+    """Why a score of ``fit_quality.csv`` is NaN, or rests on fewer replicates than drawn ("" if neither)."""
+    notes = []
+    if not np.isfinite(ins["score"]):
+        notes.append(f"in-sample scores NaN: the fitted parameters cannot be integrated on the calibration runs "
+                     f"({ins.get('failure', '')})")
+    if not len(h):
+        notes.append("held-out scores NaN: no bootstrap replicate held a seed out (one seed per ensemble, "
+                     "or no replicates)")
+    else:
+        failed = h[~np.isfinite(h["score"])]
+        if len(failed) == len(h):
+            notes.append(f"held-out scores NaN: no replicate's parameters could be integrated on its held-out "
+                         f"runs ({failed['failure'].iloc[0]})")
+        elif len(failed):
+            notes.append(f"held-out scores average {len(h) - len(failed)} of {len(h)} replicates: the other "
+                         f"{len(failed)} could not be integrated on their held-out runs ({failed['failure'].iloc[0]})")
+    return "; ".join(notes)
+
+
+def seed_warning(cases) -> str:
+    """A warning when an ensemble has fewer than ``MIN_SEEDS`` seeds ("" otherwise).
+
+    The bootstrap resamples seeds: with one seed every replicate is the same
+    and the intervals have zero width; with two they take three values.
+    """
+    counts = {}
+    for c in cases:
+        counts[c.group] = counts.get(c.group, 0) + 1
+    few = {g: n for g, n in sorted(counts.items()) if n < MIN_SEEDS}
+    if not few:
+        return ""
+    listed = ", ".join(f"{g} ({n} seed{'s' if n > 1 else ''})" for g, n in few.items())
+    return (f"bootstrap intervals rest on fewer than {MIN_SEEDS} seeds per ensemble: {listed}; they understate "
+            f"the uncertainty (zero width with one seed)")
+
+
+def final_document(doc1, doc2, default_route) -> dict:
+    """Step 7b: the parameter document of each model's default route (friction laws from route 1)."""
     final = dict(doc1)
     for model in ("model1", "model2"):
         final[model] = (doc1 if default_route[model] == "backsolve" else doc2)[model]
-    ss = steady_check(final, steady)
-    xc_bound = {"backsolve": r1["model1"].extra["X_c_lower_bound"],
-                "curves": fits.xc_lower_bound(steady, settings.xc_margin)}
+    return final
+
+
+def xc_lower_bounds(r1, steady, settings: Settings) -> dict:
+    """The lower bound of Model 1's X_c each route fitted under."""
+    return {"backsolve": r1["model1"].extra["X_c_lower_bound"],
+            "curves": fits.xc_lower_bound(steady, settings.xc_margin)}
+
+
+def compare_steady(quality, final, doc1, doc2, steady, xc_bound) -> None:
+    """Step 7c: add to each model row of ``quality`` its steady state against the DEM's, and Model 1's pole checks."""
     for q in quality:
         doc = dict(final)
         doc[q["model"]] = (doc1 if q["route"] == "backsolve" else doc2)[q["model"]]
-        s = steady_check(doc, steady)[q["model"]]
+        s = steady_check(doc)[q["model"]]
         q.update({f"steady_{k}": v for k, v in s.items() if k != "error"})
         q["dem_steady_A_norm"], q["dem_steady_theta_A"], q["dem_steady_X"] = steady["A_norm"], steady["theta_A"], steady["X"]
         if q["model"] == "model1":
@@ -183,11 +296,17 @@ def run(case_dirs, out, settings: Settings = Settings(), log=print, argv=None) -
             q["dem_X_reversal_bound"] = steady["X_reversal_bound"]
             q["X_c_lower_bound"] = xc_bound[q["route"]]
             q["X_c_at_lower_bound"] = bool(q["X_c"] <= q["X_c_lower_bound"] * (1 + 1e-6))
-    for name, fr in (("friction_eq2", r1["friction_eq2"]), ("friction_quadratic", r1["friction_quadratic"])):
-        quality.append({"model": name, "route": "mu_vs_X", "insample_rms_mu": fr.rms, "fit_cost": fr.cost,
-                        "fit_message": fr.message, "default": True, "n_samples": fr.n_data})
 
-    # tables
+
+def friction_quality(r1) -> list:
+    """Step 7d: the ``fit_quality.csv`` rows of the two friction laws."""
+    return [{"model": name, "route": "mu_vs_X", "insample_rms_mu": r1[name].rms, "fit_cost": r1[name].cost,
+             "fit_message": r1[name].message, "default": True, "n_samples": r1[name].n_data}
+            for name in ("friction_eq2", "friction_quadratic")]
+
+
+def parameter_table(doc1, doc2, iv, default_route, xc_bound) -> pd.DataFrame:
+    """Step 8a: ``params_table.csv``: every route's values with intervals, defaults and constraint notes."""
     fitted = {("mu_vs_X", "friction_eq2"): doc1["friction_eq2"],
               ("mu_vs_X", "friction_quadratic"): doc1["friction_quadratic"],
               ("backsolve", "model1"): doc1["model1"], ("curves", "model1"): doc2["model1"],
@@ -195,12 +314,20 @@ def run(case_dirs, out, settings: Settings = Settings(), log=print, argv=None) -
     bounds = {(route, block, name): b for (block, name), b in fits.SIGN_BOUNDS.items()
               for route in ("mu_vs_X", "backsolve", "curves")}
     bounds.update({(route, "model1", "X_c"): (xb, np.inf) for route, xb in xc_bound.items()})
-    ptab = tables.params_table(fitted, iv, default_route, bounds)
+    return tables.params_table(fitted, iv, default_route, bounds)
+
+
+def default_intervals(ptab) -> dict:
+    """Step 8b: the intervals of the default rows, as params.yaml's ``intervals`` block."""
     intervals = {}
     for _, row in ptab[ptab["default"]].iterrows():
         intervals.setdefault(row["block"], {})[row["parameter"]] = [float(row["low"]), float(row["high"])]
-    final["intervals"] = intervals
-    final["provenance"] = {
+    return intervals
+
+
+def provenance(cases, default_route, steady, settings: Settings, argv) -> dict:
+    """Step 8c: params.yaml's ``provenance`` block (inputs, command, settings, date)."""
+    return {
         "source": "calibrate (python -m calibrate)",
         "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
         "command": " ".join(argv) if argv else None,
@@ -208,39 +335,83 @@ def run(case_dirs, out, settings: Settings = Settings(), log=print, argv=None) -
         "groups": sorted({c.group for c in cases}),
         "seeds": [c.seed for c in cases],
         "default_route": default_route,
-        "routes": {k: v for k, v in tables.ROUTE_NAMES.items()},
+        "routes": dict(tables.ROUTE_NAMES),
         "intervals": f"bootstrap over seeds, {settings.n_boot} replicates, 2.5-97.5 percentiles",
         "dem_steady_state": steady,
         "settings": settings.as_dict(),
         "synthetic_input": any(c.preshear.meta.get("synthetic") for c in cases),
     }
+
+
+def write_tables(out: Path, final, ptab, btab, quality, heldout, values) -> None:
+    """Step 9, write: params.yaml and the CSV tables under ``out``."""
     tables.write_params(final, out / "params.yaml")
     tables.write_csv(ptab, out / "params_table.csv")
-    btab = tables.bins_table(r1["bins"], iv)
     tables.write_csv(btab, out / "backsolve_alpha_vs_X.csv")
     tables.write_csv(pd.DataFrame(quality), out / "fit_quality.csv")
-    if len(heldout):
-        tables.write_csv(heldout, out / "heldout_scores.csv")
+    if len(heldout):  # a failed replicate: NaN scores, the reason in 'failure'
+        tables.write_csv(heldout.replace([np.inf, -np.inf], np.nan), out / "heldout_scores.csv")
     tables.write_csv(values, out / "bootstrap_values.csv")
 
+
+def write_figures(out: Path, samples, replays, btab, doc1, doc2, final, default_route, settings: Settings,
+                  log) -> None:
+    """Step 10: Fig. 2a, 2b, 3a, 3b and the default routes' curves against the DEM's."""
+    X, mu = route1.friction_data(samples, settings.backsolve)
+    figures.fig2a(samples, out / "fig2a_stress_vs_Axy.png")
+    figures.fig2b(X, mu, doc1["friction_eq2"], doc1["friction_quadratic"], out / "fig2b_mu_vs_X.png")
+    m1 = {"back-solve": doc1["model1"], "curves": doc2["model1"]}
+    m2 = {"back-solve": doc1["model2"], "curves": doc2["model2"]}
+    figures.fig3(btab, 1, m1, m2, out / "fig3a_alpha1_vs_X.png")
+    figures.fig3(btab, 2, m1, m2, out / "fig3b_alpha2_vs_X.png")
+    preds = {}
+    prm = params_from_dict(final)
+    for model in ("model1", "model2"):
+        fr = "eq2" if model == "model1" else "quadratic"
+        try:
+            preds[f"{model} ({default_route[model]})"] = {
+                r.label: route2.replay_run(prm, r, model, fr, settings.route2) for r in replays}
+        except (ValueError, RuntimeError) as exc:
+            log(f"figure: {model} cannot be integrated ({exc})")
+    figures.fig_curves(replays, preds, out / "fig_curves_model_vs_dem.png")
+
+
+def run(case_dirs, out, settings: Settings = Settings(), log=print, argv=None) -> dict:
+    """Calibrate on ``case_dirs`` and write every output under ``out``. Returns a summary dict.
+
+    The steps, each a function above: read, smooth, fit friction, route 1,
+    route 2, bootstrap, scores and default routes, tables, write, figures.
+    """
+    t0 = time.time()
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    cases = read_inputs(case_dirs, settings)
+    log(f"read {len(cases)} case(s): {', '.join(c.name for c in cases)}")
+    warning = seed_warning(cases)
+    if warning:
+        log(f"warning: {warning}")
+    samples, steady = smooth(cases, settings)
+    friction = fit_friction(samples, steady, settings)
+    r1, doc1 = fit_route1(samples, steady, friction, settings)
+    log(f"route 1 done ({time.time() - t0:.1f} s): {int(r1['bins']['used'].sum())} of {len(r1['bins'])} bins used")
+    replays, r2, doc2 = fit_route2(cases, samples, steady, r1, doc1, settings, log)
+    values, heldout, iv = run_bootstrap(cases, samples, replays, r1, r2, doc1, settings, log)
+    log(f"bootstrap done ({time.time() - t0:.1f} s)")
+    quality, default_route = score_routes(replays, heldout, r1, r2, doc1, doc2, settings)
+    final = final_document(doc1, doc2, default_route)
+    xc_bound = xc_lower_bounds(r1, steady, settings)
+    compare_steady(quality, final, doc1, doc2, steady, xc_bound)
+    quality += friction_quality(r1)
+    for q in quality:
+        q["warning"] = warning
+    ptab = parameter_table(doc1, doc2, iv, default_route, xc_bound)
+    final["intervals"] = default_intervals(ptab)
+    final["provenance"] = provenance(cases, default_route, steady, settings, argv)
+    btab = tables.bins_table(r1["bins"], iv)
+    write_tables(out, final, ptab, btab, quality, heldout, values)
     if settings.figures:
-        X, mu = route1.friction_data(samples, bs)
-        figures.fig2a(samples, out / "fig2a_stress_vs_Axy.png")
-        figures.fig2b(X, mu, doc1["friction_eq2"], doc1["friction_quadratic"], out / "fig2b_mu_vs_X.png")
-        m1 = {"back-solve": doc1["model1"], "curves": doc2["model1"]}
-        m2 = {"back-solve": doc1["model2"], "curves": doc2["model2"]}
-        figures.fig3(btab, 1, m1, m2, out / "fig3a_alpha1_vs_X.png")
-        figures.fig3(btab, 2, m1, m2, out / "fig3b_alpha2_vs_X.png")
-        preds = {}
-        prm = params_from_dict(final)
-        for model in ("model1", "model2"):
-            fr = "eq2" if model == "model1" else "quadratic"
-            try:
-                preds[f"{model} ({default_route[model]})"] = {
-                    r.label: route2.replay_run(prm, r, model, fr, settings.route2) for r in replays}
-            except (ValueError, RuntimeError) as exc:
-                log(f"figure: {model} cannot be integrated ({exc})")
-        figures.fig_curves(replays, preds, out / "fig_curves_model_vs_dem.png")
+        write_figures(out, samples, replays, btab, doc1, doc2, final, default_route, settings, log)
     log(f"wrote {out} ({time.time() - t0:.1f} s); default routes: {default_route}")
     return {"default_route": default_route, "params": final, "route1": r1, "route2": r2, "intervals": iv,
-            "quality": pd.DataFrame(quality), "steady": steady, "steady_check": ss, "elapsed": time.time() - t0}
+            "quality": pd.DataFrame(quality), "steady": steady, "steady_check": steady_check(final),
+            "elapsed": time.time() - t0}

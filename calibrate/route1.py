@@ -37,9 +37,40 @@ def mu_noise(samples):
     return max(float(1.4826 * np.median(np.abs(s - np.median(s)))), 1e-4)
 
 
+def fit_friction(samples, steady, settings=backsolve.BacksolveSettings(), steady_weight=1.0) -> dict:
+    """Fit Eq. 2 and the quadratic law of [15] to the samples' mu(X).
+
+    Returns
+    -------
+    dict
+        ``friction_eq2``, ``friction_quadratic`` (``fits.FitResult``) and
+        ``sigma_mu``, the per-sample friction noise they are weighted by (``mu_noise``).
+    """
+    X, mu = friction_data(samples, settings)
+    sigma_mu = mu_noise(samples)
+    return {"sigma_mu": sigma_mu,
+            "friction_eq2": fits.fit_eq2(X, mu, sigma_mu, steady, steady_weight),
+            "friction_quadratic": fits.fit_quadratic(X, mu, sigma_mu, steady, steady_weight)}
+
+
+def fit_coefficients(samples, steady, settings=backsolve.BacksolveSettings(), steady_weight=1.0, xc_margin=2e-3,
+                     model1_start=None) -> dict:
+    """Back-solve alpha1, alpha2 in bins of X and fit Model 1 (Eq. 6) and Model 2 (Eq. 5) to them.
+
+    Returns
+    -------
+    dict
+        ``bins`` (DataFrame of ``backsolve.binned``), ``model1``, ``model2`` (``fits.FitResult``).
+    """
+    bins = backsolve.binned(samples, settings)
+    return {"bins": bins,
+            "model1": fits.fit_model1(bins, steady, steady_weight, xc_margin, x0=model1_start),
+            "model2": fits.fit_model2(bins, steady, steady_weight)}
+
+
 def run_route1(samples, steady, settings=backsolve.BacksolveSettings(), steady_weight=1.0, xc_margin=2e-3,
                model1_start=None):
-    """Back-solve and fit every block.
+    """Back-solve and fit every block: ``fit_friction`` and ``fit_coefficients`` together.
 
     Returns
     -------
@@ -47,12 +78,6 @@ def run_route1(samples, steady, settings=backsolve.BacksolveSettings(), steady_w
         ``bins`` (DataFrame), ``friction_eq2``, ``friction_quadratic``, ``model1``,
         ``model2`` (``fits.FitResult``), ``sigma_mu``.
     """
-    bins = backsolve.binned(samples, settings)
-    X, mu = friction_data(samples, settings)
-    sigma_mu = mu_noise(samples)
-    out = {"bins": bins, "sigma_mu": sigma_mu}
-    out["friction_eq2"] = fits.fit_eq2(X, mu, sigma_mu, steady, steady_weight)
-    out["friction_quadratic"] = fits.fit_quadratic(X, mu, sigma_mu, steady, steady_weight)
-    out["model1"] = fits.fit_model1(bins, steady, steady_weight, xc_margin, x0=model1_start)
-    out["model2"] = fits.fit_model2(bins, steady, steady_weight)
+    out = fit_friction(samples, steady, settings, steady_weight)
+    out.update(fit_coefficients(samples, steady, settings, steady_weight, xc_margin, model1_start))
     return out

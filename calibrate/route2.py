@@ -171,6 +171,49 @@ def _with_block(base: dict, block: str, values: dict):
     return params_from_dict(d, source=f"route2 trial ({block})")
 
 
+def _scaled_bounds(model, steady, settings: Route2Settings, x_lower):
+    """Keys, scale and scaled bounds of the fitted block (Model 1: X_c above ``fits.xc_lower_bound``)."""
+    if model == "model1":
+        scale = np.array([1.0, 10.0, 1e3, 1.0, 10.0, 1e3, 0.01])
+        xl = fits.xc_lower_bound(steady, settings.xc_margin) if x_lower is None else x_lower
+        lo, hi = (b / scale for b in fits.model1_bounds(xl))
+        return fits.M1_KEYS, scale, lo, hi
+    return fits.M2_KEYS, np.array([1.0, 1.0, 10.0]), np.full(3, -np.inf), np.full(3, np.inf)
+
+
+def _objective(replays, base_params, model, keys, scale, steady, sigma_mu, settings: Route2Settings, n_res):
+    """The residual function of ``fit`` and the state it keeps (evaluations, failures, best point).
+
+    A trial set that cannot be integrated (pole, divergence, no steady state)
+    gets ``PENALTY`` in every residual; past ``max_evals`` evaluations it raises ``_Budget``.
+    """
+    friction = "eq2" if model == "model1" else "quadratic"
+    alpha = fits.alpha_model1 if model == "model1" else fits.alpha_model2
+    state = {"n": 0, "best": None, "best_cost": np.inf, "fails": 0}
+
+    def res(p):
+        if state["n"] >= settings.max_evals:
+            raise _Budget
+        state["n"] += 1
+        vals = dict(zip(keys, (p * scale).tolist()))
+        try:
+            prm = _with_block(base_params, model, vals)
+            r = residuals(prm, replays, model, friction, sigma_mu, settings)
+            s1, s2 = alpha(steady["X"], *[vals[k] for k in keys])
+            r = np.concatenate([r, fits._steady_fabric_residuals(s1, s2, steady, settings.steady_weight)])
+            if not np.all(np.isfinite(r)):
+                raise ValueError("non-finite residuals")
+        except (PoleError, ValueError, FloatingPointError, RuntimeError):
+            state["fails"] += 1
+            r = np.full(n_res, PENALTY)
+        cost = 0.5 * float(np.sum(r**2))
+        if cost < state["best_cost"]:
+            state["best_cost"], state["best"] = cost, p.copy()
+        return r
+
+    return res, state
+
+
 def fit(replays, base_params: dict, model: str, start: dict, steady: dict, sigma_mu: float,
         settings: Route2Settings = Route2Settings(), x_lower=None) -> FitResult:
     """Least-squares fit of the ``model`` block to the replays, from ``start``.
@@ -189,42 +232,9 @@ def fit(replays, base_params: dict, model: str, start: dict, steady: dict, sigma
     x_lower : float, optional
         Lower bound of X_c (Model 1); default ``fits.xc_lower_bound(steady, xc_margin)``.
     """
-    friction = "eq2" if model == "model1" else "quadratic"
-    keys = fits.M1_KEYS if model == "model1" else fits.M2_KEYS
-    if model == "model1":
-        scale = np.array([1.0, 10.0, 1e3, 1.0, 10.0, 1e3, 0.01])
-        xl = fits.xc_lower_bound(steady, settings.xc_margin) if x_lower is None else x_lower
-        lo, hi = (b / scale for b in fits.model1_bounds(xl))
-    else:
-        scale = np.array([1.0, 1.0, 10.0])
-        lo = np.full(3, -np.inf)
-        hi = np.full(3, np.inf)
+    keys, scale, lo, hi = _scaled_bounds(model, steady, settings, x_lower)
     n_res = sum(3 * len(r.s) for r in replays) + fits.N_STEADY
-    state = {"n": 0, "best": None, "best_cost": np.inf, "fails": 0}
-
-    def res(p):
-        if state["n"] >= settings.max_evals:
-            raise _Budget
-        state["n"] += 1
-        vals = dict(zip(keys, (p * scale).tolist()))
-        try:
-            prm = _with_block(base_params, model, vals)
-            r = residuals(prm, replays, model, friction, sigma_mu, settings)
-            if model == "model1":
-                s1, s2 = fits.alpha_model1(steady["X"], *[vals[k] for k in keys])
-            else:
-                s1, s2 = fits.alpha_model2(steady["X"], *[vals[k] for k in keys])
-            r = np.concatenate([r, fits._steady_fabric_residuals(s1, s2, steady, settings.steady_weight)])
-            if not np.all(np.isfinite(r)):
-                raise ValueError("non-finite residuals")
-        except (PoleError, ValueError, FloatingPointError, RuntimeError):
-            state["fails"] += 1
-            r = np.full(n_res, PENALTY)
-        cost = 0.5 * float(np.sum(r**2))
-        if cost < state["best_cost"]:
-            state["best_cost"], state["best"] = cost, p.copy()
-        return r
-
+    res, state = _objective(replays, base_params, model, keys, scale, steady, sigma_mu, settings, n_res)
     x0 = np.array([start[k] for k in keys]) / scale
     with np.errstate(invalid="ignore"):
         x0 = np.clip(x0, np.where(np.isfinite(lo), lo + 1e-9 * np.abs(lo) + 1e-12, lo),
@@ -247,9 +257,11 @@ def fit(replays, base_params: dict, model: str, start: dict, steady: dict, sigma
 def score(params, replays, model: str, settings: Route2Settings, sigma_mu: float) -> dict:
     """Prediction error of ``params`` on ``replays`` (e.g. held-out seeds).
 
-    Returns RMS of |A|, theta_A (degrees, wrapped), mu, and ``score`` = RMS of
-    the normalised residuals (the route-2 objective without the steady terms).
-    ``inf`` everywhere if the model cannot be integrated (pole, no steady state).
+    Returns RMS of |A|, theta_A (degrees, wrapped), mu, ``score`` = RMS of
+    the normalised residuals (the route-2 objective without the steady terms),
+    and ``failure``: empty, or, if the model cannot be integrated (pole,
+    diverging fabric, no steady state), the reason, with ``inf`` in every
+    number (the worst score, for comparisons; tables write NaN and the reason).
     """
     friction = "eq2" if model == "model1" else "quadratic"
     try:
@@ -262,6 +274,7 @@ def score(params, replays, model: str, settings: Route2Settings, sigma_mu: float
             dmu.append(m[:, 2] - r.mu)
         rms = lambda v: float(np.sqrt(np.mean(np.concatenate(v) ** 2)))  # noqa: E731
         return {"score": float(np.sqrt(np.mean(z**2))), "rms_A_norm": rms(dA), "rms_theta_A": rms(dth),
-                "rms_mu": rms(dmu)}
-    except (PoleError, ValueError, FloatingPointError, RuntimeError):
-        return {"score": np.inf, "rms_A_norm": np.inf, "rms_theta_A": np.inf, "rms_mu": np.inf}
+                "rms_mu": rms(dmu), "failure": ""}
+    except (PoleError, ValueError, FloatingPointError, RuntimeError) as exc:
+        reason = f"{type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''}"
+        return {"score": np.inf, "rms_A_norm": np.inf, "rms_theta_A": np.inf, "rms_mu": np.inf, "failure": reason}

@@ -129,6 +129,9 @@ def main(argv=None):
     args = build_parser().parse_args(argv)
     try:
         return args.func(args)
-    except (DEMInputError, ValueError, FileNotFoundError) as exc:
+    except (DEMInputError, ValueError) as exc:
         print(f"compare {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:  # a missing input, or an --out that cannot be written
+        print(f"compare {args.command}: error: {exc.filename or args.out}: {exc.strerror or exc}", file=sys.stderr)
         return 2

@@ -20,6 +20,26 @@ class DEMInputError(ValueError):
     """A DEM file is missing, malformed, breaks the contract or cannot be used; the message names the file and the problem."""
 
 
+#: Physical bounds every finite value of a column must respect, as (low, high, low_open):
+#: A = -I/2 + <n (x) n> has eigenvalues in [-1/2, 1/2], so |A_xx|, |A_xy| <= 1/2; the wall
+#: pressure p is positive (compression); mu = |sigma_xy|/p is not negative and, for a
+#: granular layer, far below MU_MAX (DEM runs stay below 1 even in a reversal's transient).
+MU_MAX = 2.0
+BOUNDS = {"A_xx": (-0.5, 0.5, False), "A_xy": (-0.5, 0.5, False), "p": (0.0, np.inf, True),
+          "mu": (0.0, MU_MAX, False)}
+
+#: Strain and time must agree with the rate: between two rows, the strain increment and the
+#: trapezoid integral of gammadot over the time step may differ by at most STRAIN_REL_TOL of
+#: the larger of the two plus the strain the run's median |gammadot| advances in that time
+#: step (the second term covers rows near a zero crossing of the rate, where both are
+#: tiny). Measured on real YADE series (tiny cell of tests/test_dem_stages.py: pre-shear,
+#: Heaviside and sinusoidal runs) the deviation is at most 4.4e-4 of this allowance (0.019
+#: of the increment itself, at the sinusoid's zero crossing); on model-made series with the
+#: contract's noise (dem_contract.synthetic) 4e-4. A strain jump, or a time jump without
+#: strain, exceeds it by orders of magnitude.
+STRAIN_REL_TOL = 0.1
+
+
 def read_series(path, columns=CONTRACT_COLUMNS, min_samples: int = 2, what: str | None = None,
                 finite=None) -> pd.DataFrame:
     """Read one contract CSV and check it.
@@ -46,10 +66,16 @@ def read_series(path, columns=CONTRACT_COLUMNS, min_samples: int = 2, what: str 
     Raises
     ------
     DEMInputError
-        In the order checked: the file is missing or not a readable CSV; a
+        In the order checked: the file is missing; a ragged row (a line with
+        fewer or more fields than the header, or a last line without its
+        newline: a row cut off while being written); not a readable CSV; a
         column is missing; a NaN, infinite or non-numeric value in a
         ``finite`` column (named with its first data row); fewer than
-        ``min_samples`` rows; ``t`` not strictly increasing.
+        ``min_samples`` rows; ``t`` not strictly increasing; a value outside
+        its physical range (``BOUNDS``: |A_xx|, |A_xy| <= 1/2, p > 0,
+        0 <= mu <= ``MU_MAX``); strain and t inconsistent with the integral of
+        gammadot (a jump; when ``strain`` and ``gammadot`` are read). Every
+        message names the file and the data row (counted from 1 after the header).
     """
     columns = list(columns)
     finite = columns if finite is None else list(finite)
@@ -58,6 +84,7 @@ def read_series(path, columns=CONTRACT_COLUMNS, min_samples: int = 2, what: str 
     path = Path(path)
     if not path.is_file():
         raise DEMInputError(f"{path}: file not found" + (f" (expected {what})" if what else ""))
+    _check_rows_complete(path)
     try:
         raw = pd.read_csv(path)
     except Exception as exc:  # pandas raises several types for unreadable files
@@ -79,7 +106,87 @@ def read_series(path, columns=CONTRACT_COLUMNS, min_samples: int = 2, what: str 
     dt = np.diff(data["t"].to_numpy())
     if np.any(dt <= 0):
         raise DEMInputError(f"{path}: column 't' does not increase strictly (data row {int(np.argmax(dt <= 0)) + 2})")
+    _check_bounds(path, data)
+    if {"strain", "gammadot"} <= set(columns):
+        _check_strain_integral(path, data)
     return data
+
+
+def _check_rows_complete(path: Path) -> None:
+    """Every line holds as many fields as the header, and the file ends with a newline.
+
+    A row cut off while being written (a killed run, a full disk) is otherwise
+    read by pandas as NaN in its missing fields, or as a shortened number.
+
+    Raises
+    ------
+    DEMInputError
+        Naming the line (and data row) with too few or too many fields, or the
+        last line when it does not end with a newline.
+    """
+    try:
+        text = path.read_text()
+    except (OSError, UnicodeDecodeError) as exc:
+        raise DEMInputError(f"{path}: not a readable CSV ({exc})") from None
+    lines = text.splitlines()
+    if not lines:
+        return  # pandas reports the empty file
+    n_fields = lines[0].count(",") + 1
+    for k, line in enumerate(lines[1:], start=2):
+        got = line.count(",") + 1
+        if got != n_fields:
+            raise DEMInputError(f"{path}: line {k} (data row {k - 1}) has {got} field(s), the header {n_fields}: "
+                                "a ragged row (cut off while being written?)")
+    if len(lines) > 1 and not text.endswith("\n"):
+        raise DEMInputError(f"{path}: the last line (line {len(lines)}, data row {len(lines) - 1}) does not end "
+                            "with a newline: the row was cut off while being written")
+
+
+def _check_bounds(path: Path, data: pd.DataFrame) -> None:
+    """Finite values of the ``BOUNDS`` columns lie within their physical range."""
+    for col, (low, high, low_open) in BOUNDS.items():
+        if col not in data.columns:
+            continue
+        v = pd.to_numeric(data[col], errors="coerce").to_numpy(dtype=float)
+        with np.errstate(invalid="ignore"):
+            bad = np.isfinite(v) & ((v <= low if low_open else v < low) | (v > high))
+        if bad.any():
+            k = int(np.argmax(bad))
+            allowed = f"{'(' if low_open else '['}{low:g}, {high:g}]"
+            raise DEMInputError(f"{path}: column '{col}' = {v[k]:.6g} at data row {k + 1} is outside its "
+                                f"physical range {allowed} ({int(bad.sum())} row(s) in all)")
+
+
+def _check_strain_integral(path: Path, data: pd.DataFrame) -> None:
+    r"""Strain and time agree with the rate between consecutive rows.
+
+    .. math:: |\Delta\gamma_i - T_i| \le r\,\big(\max(|\Delta\gamma_i|, |T_i|)
+              + \mathrm{median}|\dot\gamma|\,\Delta t_i\big),\qquad
+              T_i = \tfrac12(\dot\gamma_{i-1} + \dot\gamma_i)\,\Delta t_i
+
+    with :math:`r` = ``STRAIN_REL_TOL``, over the rows where t, strain and
+    gammadot are all finite.
+
+    Raises
+    ------
+    DEMInputError
+        Naming the first row where the strain (or the time) jumps.
+    """
+    t, s, g = (pd.to_numeric(data[c], errors="coerce").to_numpy(dtype=float) for c in ("t", "strain", "gammadot"))
+    rows = np.nonzero(np.isfinite(t) & np.isfinite(s) & np.isfinite(g))[0]
+    if len(rows) < 2:
+        return
+    t, s, g = t[rows], s[rows], g[rows]
+    ds, dt = np.diff(s), np.diff(t)
+    trap = 0.5 * (g[1:] + g[:-1]) * dt
+    tol = STRAIN_REL_TOL * (np.maximum(np.abs(ds), np.abs(trap)) + np.median(np.abs(g)) * dt)
+    bad = np.abs(ds - trap) > tol
+    if bad.any():
+        k = int(np.argmax(bad))
+        raise DEMInputError(
+            f"{path}: strain jumps by {ds[k]:+.6g} between data rows {rows[k] + 1} and {rows[k + 1] + 1} where "
+            f"the rate integrates to {trap[k]:+.6g} over the time step: strain, t and gammadot disagree "
+            f"(tolerance {tol[k]:.3g})")
 
 
 def read_sidecar(path) -> dict:

@@ -23,8 +23,38 @@ def _tolerance(items):
     return out
 
 
+def _input_file(path, what: str) -> Path:
+    """``path`` as a Path if it is an existing file; a ``StudyInputError`` naming it otherwise."""
+    path = Path(path)
+    if not path.exists():
+        raise analysis.StudyInputError(f"{path}: {what} not found")
+    if path.is_dir():
+        raise analysis.StudyInputError(f"{path}: is a directory, expected the {what}")
+    return path
+
+
+def _read_yaml(path, what: str):
+    """Parse a YAML file; malformed YAML is a ``StudyInputError`` naming the file and line."""
+    path = _input_file(path, what)
+    try:
+        return yaml.safe_load(path.read_text())
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f"{path}:{mark.line + 1}:{mark.column + 1}" if mark is not None else str(path)
+        raise analysis.StudyInputError(
+            f"{where}: malformed YAML in the {what}: {getattr(exc, 'problem', None) or exc}") from None
+
+
 def analyse(args) -> int:
-    points = pd.read_csv(args.points)
+    points_file = _input_file(args.points, "points table (--points)")
+    if not Path(args.dem_dir).is_dir():
+        raise analysis.StudyInputError(f"{args.dem_dir}: DEM folder (--dem-dir) not found")
+    try:
+        points = pd.read_csv(points_file)
+    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
+        raise analysis.StudyInputError(f"{points_file}: not a readable CSV ({str(exc).strip()})") from None
+    if "point" not in points.columns:
+        raise analysis.StudyInputError(f"{points_file}: missing column 'point' (the table of grid.expand)")
     tol = _tolerance(args.tolerance)
     edges = analysis.strain_edges(args.heaviside_strain, args.transient_bin)
     results = {p: analysis.load_point(Path(args.dem_dir) / p, p, args.steady_window, edges)
@@ -65,10 +95,15 @@ def analyse(args) -> int:
 
 
 def estimate(args) -> int:
-    config = yaml.safe_load(Path(args.configfile).read_text())
+    config = _read_yaml(args.configfile, "config file (--configfile)")
+    if not isinstance(config, dict) or not isinstance(config.get("accuracy"), dict):
+        raise analysis.StudyInputError(f"{args.configfile}: missing block 'accuracy' (the DEM study's settings)")
     if args.subset:
         config["accuracy"]["subset"] = args.subset
-    est = grid.estimate(config)
+    try:
+        est = grid.estimate(config)
+    except KeyError as exc:
+        raise analysis.StudyInputError(f"{args.configfile}: missing key {exc}") from None
     print(est[["point", "N", "steps", "est_core_s"]].to_string(float_format=lambda x: f"{x:.4g}"))
     total = est["est_core_s"].sum()
     print(f"{len(est)} DEM cases: {total / 3600:.2f} core-hours; "
@@ -100,5 +135,5 @@ def main(argv=None) -> int:
     try:
         return args.func(args)
     except (analysis.StudyInputError, ValueError) as err:
-        print(f"dem_study: {err}", file=sys.stderr)
+        print(f"dem_study {args.command}: error: {err}", file=sys.stderr)
         return 2

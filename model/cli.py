@@ -54,11 +54,40 @@ def make_history(args):
         return histories.sinusoidal(args.strain_before, args.transition_strain, args.strain_after, args.gammadot)
     if not args.table:
         raise ValueError("--protocol table needs --table FILE (CSV with columns t, gammadot)")
-    tab = pd.read_csv(args.table)
+    return histories.tabulated(*read_table(args.table))
+
+
+def read_table(path):
+    """Columns ``t`` and ``gammadot`` of a protocol table (CSV), checked.
+
+    Raises
+    ------
+    ValueError
+        One line naming the file and the problem: not found, a directory, not
+        a CSV, a missing column, or a non-numeric or non-finite value (with
+        its data row, counted from 1).
+    """
+    path = Path(path)
+    if not path.exists():
+        raise ValueError(f"{path}: --table file not found")
+    if path.is_dir():
+        raise ValueError(f"{path}: --table is a directory, expected a CSV with columns t, gammadot")
+    try:
+        tab = pd.read_csv(path)
+    except (OSError, UnicodeDecodeError, pd.errors.ParserError, pd.errors.EmptyDataError) as exc:
+        raise ValueError(f"{path}: not a readable CSV ({str(exc).strip().splitlines()[0]})") from None
+    tab.columns = [str(c).strip() for c in tab.columns]
     missing = {"t", "gammadot"} - set(tab.columns)
     if missing:
-        raise ValueError(f"{args.table}: missing column(s) {sorted(missing)}")
-    return histories.tabulated(tab["t"].to_numpy(), tab["gammadot"].to_numpy())
+        raise ValueError(f"{path}: missing column(s) {sorted(missing)}; a table needs columns t, gammadot")
+    out = []
+    for col in ("t", "gammadot"):
+        values = pd.to_numeric(tab[col], errors="coerce").to_numpy(dtype=float)
+        bad = ~np.isfinite(values)
+        if bad.any():
+            raise ValueError(f"{path}: column '{col}' is not a finite number at data row {int(np.argmax(bad)) + 1}")
+        out.append(values)
+    return out
 
 
 def plot(tables: dict, path: Path, title: str) -> None:
@@ -111,15 +140,19 @@ def main(argv=None) -> int:
         print(f"method: {args.method} ({tol}); friction: {args.friction}")
         tables = {m: simulate(params, history, model=m, method=args.method, rtol=args.rtol, atol=args.atol,
                               step=args.step, friction=args.friction) for m in models}
-    except ValueError as err:
-        print(f"error: {err}", file=sys.stderr)
+    except ValueError as err:  # bad input: one line, no traceback (PoleError is a ValueError too)
+        print(f"python -m model simulate: error: {err}", file=sys.stderr)
         return 2
     out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
     stem = args.stem or args.protocol
     csv = out / f"{stem}.csv"
-    pd.concat([t.assign(model=m) for m, t in tables.items()]).to_csv(csv, index=False)
     png = out / f"{stem}.png"
-    plot(tables, png, f"{args.protocol} reversal ({args.friction} friction, {args.method})")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        pd.concat([t.assign(model=m) for m, t in tables.items()]).to_csv(csv, index=False)
+        plot(tables, png, f"{args.protocol} reversal ({args.friction} friction, {args.method})")
+    except OSError as err:
+        print(f"python -m model simulate: error: --out {out}: cannot write ({err.strerror or err})", file=sys.stderr)
+        return 2
     print(f"wrote {csv} and {png}")
     return 0

@@ -214,11 +214,13 @@ def simulate(params, history: History, model="model1", A0=None, method=DEFAULT_M
         Initial fabric; default the model's steady state for the sign of the
         first non-zero shear rate (``steady_state``).
     method : {"RK4", "RK23", "RK45", "DOP853", "Radau", "BDF", "LSODA"}
-        ``"RK4"`` is the paper's fixed step; the others are scipy's.
+        ``"RK4"`` is the paper's fixed step (cut where stiff); the others are scipy's.
     rtol, atol : float
         Tolerances of the scipy methods.
     step : float, optional
         RK4 time step; default ``1e-2`` units of strain at the largest rate.
+        RK4 cuts it where Eq. 4 is stiff or X nears the pole (``model.rk4``),
+        and refuses with the step it needs if that takes too many steps.
     friction : {"eq2", "quadratic"}
         Eq. 2 or the quadratic law of [15].
     strain_eval : array, optional
@@ -297,10 +299,11 @@ def _integrate_segments(history, alphas, X_c, y, times, method, rtol, atol, step
         rate = make_rate(s.kin, alphas, X_c)
         _check_start_below_pole(history, i, y, X_c)
         t_out = np.asarray(times[i], dtype=float)
+        xfun = _xfun(s)
         if method == "RK4":
-            Y, y1 = rk4_segment(rate, s.t0, s.t1, y, step, t_out, X_c)
+            Y, y1 = rk4_segment(rate, s.t0, s.t1, y, step, t_out, X_c, xfun)
         else:
-            Y, y1, _ = adaptive_segment(rate, s.t0, s.t1, y, method, rtol, atol, t_out, X_c, _xfun(s),
+            Y, y1, _ = adaptive_segment(rate, s.t0, s.t1, y, method, rtol, atol, t_out, X_c, xfun,
                                         max_steps=max_steps)
         y = np.asarray(y1, dtype=float)
         rows_t.append(t_out)

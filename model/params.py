@@ -141,8 +141,13 @@ def params_from_dict(data: dict, source: str = "parameters") -> ModelParams:
         raise ValueError(f"{source}: expected a mapping at the top level")
     if data.get("format", FORMAT_TAG) != FORMAT_TAG:
         raise ValueError(f"{source}: 'format' must be '{FORMAT_TAG}', got {data.get('format')!r}")
-    if int(data.get("version", FORMAT_VERSION)) != FORMAT_VERSION:
-        raise ValueError(f"{source}: 'version' must be {FORMAT_VERSION}, got {data.get('version')!r}")
+    version = data.get("version", FORMAT_VERSION)
+    try:
+        known = not isinstance(version, bool) and float(version) == FORMAT_VERSION
+    except (TypeError, ValueError):
+        known = False
+    if not known:
+        raise ValueError(f"{source}: 'version' must be {FORMAT_VERSION}, got {version!r}")
     allowed = set(BLOCKS) | {"format", "version", "intervals", "provenance"}
     unknown = set(data) - allowed
     if unknown:
@@ -159,11 +164,43 @@ def params_from_dict(data: dict, source: str = "parameters") -> ModelParams:
     )
 
 
-def load_params(path) -> ModelParams:
-    """Read and validate a parameter file (YAML; JSON is valid YAML too)."""
+def read_yaml(path, what: str = "file"):
+    """Parse one YAML document from ``path``.
+
+    Raises
+    ------
+    ValueError
+        One line naming the file and the problem: not found, a directory,
+        unreadable, or malformed YAML (with the line and column of yaml's
+        ``problem_mark``, counted from 1).
+    """
     path = Path(path)
-    with path.open() as fh:
-        data = yaml.safe_load(fh)
+    if not path.exists():
+        raise ValueError(f"{path}: {what} not found")
+    if path.is_dir():
+        raise ValueError(f"{path}: is a directory, expected a {what} (YAML)")
+    try:
+        text = path.read_text()
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ValueError(f"{path}: cannot read the {what} ({exc})") from None
+    try:
+        return yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f"{path}:{mark.line + 1}:{mark.column + 1}" if mark is not None else str(path)
+        problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+        raise ValueError(f"{where}: malformed YAML in the {what}: {problem}") from None
+
+
+def load_params(path) -> ModelParams:
+    """Read and validate a parameter file (YAML; JSON is valid YAML too).
+
+    Raises
+    ------
+    ValueError
+        Naming the file (and the line, for malformed YAML, or the key).
+    """
+    data = read_yaml(path, what="parameter file")
     return params_from_dict(data, source=str(path))
 
 

@@ -57,6 +57,7 @@ def test_reversal_file_without_a_reversal(good_case, tmp_path):
     case = copy_case(good_case, tmp_path / "p1_I0.001_s1")
     df = pd.read_csv(case / "heaviside.csv")
     df["gammadot"] = np.abs(df["gammadot"])
+    df["strain"] = 2 * df["strain"].iloc[0] - df["strain"]  # the strain follows the rate (the contract)
     df.to_csv(case / "heaviside.csv", index=False)
     with pytest.raises(io.DEMInputError, match=r"heaviside\.csv: 'gammadot' never takes the sign opposite"):
         io.read_case(case, protocols=("heaviside",))

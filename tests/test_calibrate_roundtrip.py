@@ -95,6 +95,9 @@ def test_outputs_hold_values_intervals_and_provenance(dem_noise_run):
     q = pd.read_csv(out / "fit_quality.csv")
     assert q["mirrored_steady_X_below_X_c"].dropna().astype(bool).all()
     assert (q["n_samples"] > 100).all()   # how many samples each fit used
+    assert q["warning"].isna().all()        # 4 seeds: intervals worth the name
+    assert not np.isinf(q.select_dtypes("number").to_numpy()).any()
+    assert np.nanmax(q.filter(regex="_score$").to_numpy()) < 1e6   # no failure penalty posing as a score
 
 
 @pytest.mark.slow

@@ -11,9 +11,16 @@ from dem_contract import CONTRACT_COLUMNS, DEMInputError, read_series, read_side
 
 
 def write_run(path, n=60, **changes):
-    """A well-formed contract CSV of ``n`` rows (time and strain increasing), with columns replaced by ``changes``."""
+    """A well-formed contract CSV of ``n`` rows, with columns replaced by ``changes``.
+
+    Physical values: time and strain increase, strain = integral of gammadot (0.01 per
+    unit time), |A_ij| < 1/2, p > 0 and mu within its range.
+    """
     df = pd.DataFrame({c: np.linspace(0.01, 1.0, n) for c in CONTRACT_COLUMNS})
     df["t"] = np.arange(1.0, n + 1.0)
+    df["gammadot"] = 0.01
+    df["strain"] = 0.01 * (df["t"] - 1.0)
+    df["A_xx"], df["A_xy"] = np.linspace(-0.02, -0.01, n), np.linspace(0.03, 0.05, n)
     for c, v in changes.items():
         df[c] = v
     df.to_csv(path, index=False)
@@ -67,6 +74,63 @@ def test_time_must_increase_strictly(tmp_path):
     t[5] = t[4]
     path = write_run(tmp_path / "preshear.csv", t=t)
     with pytest.raises(DEMInputError, match=r"preshear\.csv: column 't' does not increase strictly \(data row 6\)"):
+        read_series(path)
+
+
+def test_a_strain_jump_is_named_with_its_rows(tmp_path):
+    strain = 0.01 * np.arange(60.0)
+    strain[30:] += 0.3   # 0.3 of strain from nowhere between data rows 30 and 31
+    path = write_run(tmp_path / "heaviside.csv", strain=strain)
+    with pytest.raises(DEMInputError, match=r"heaviside\.csv: strain jumps by \+0\.31 between data rows 30 and 31 "
+                                            r"where the rate integrates to \+0\.01"):
+        read_series(path)
+
+
+def test_a_time_jump_without_strain_is_named(tmp_path):
+    t = np.arange(1.0, 61.0)
+    t[40:] += 5.0        # five time units that advance no strain at a rate of 0.01
+    path = write_run(tmp_path / "preshear.csv", t=t)
+    with pytest.raises(DEMInputError, match=r"preshear\.csv: strain jumps by \+0\.01 between data rows 40 and 41 "
+                                            r"where the rate integrates to \+0\.06"):
+        read_series(path)
+
+
+def test_strain_check_tolerates_a_sampled_rate_through_zero(tmp_path):
+    """A half-cosine reversal sampled in time: the trapezoid is far off in relative terms at the zero crossing."""
+    t = np.linspace(0.0, 10.0, 60)
+    g = 0.01 * np.cos(np.pi * t / 10.0)
+    path = write_run(tmp_path / "sinusoidal.csv", t=t + 1.0, gammadot=g, strain=0.1 / np.pi * np.sin(np.pi * t / 10.0))
+    assert len(read_series(path)) == 60
+
+
+@pytest.mark.parametrize("cut", ["inside a field", "after a separator"])
+def test_a_row_cut_off_is_named_with_its_line(tmp_path, cut):
+    path = write_run(tmp_path / "heaviside.csv")
+    lines = path.read_text().splitlines()
+    last = lines[-1]
+    lines[-1] = last[: last.index(",", len(last) // 2) + (0 if cut == "inside a field" else 1)]
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(DEMInputError, match=r"heaviside\.csv: line 61 \(data row 60\) has \d+ field\(s\), the header 17"):
+        read_series(path)
+
+
+def test_a_last_line_without_its_newline_is_named(tmp_path):
+    path = write_run(tmp_path / "heaviside.csv")
+    path.write_text(path.read_text()[:-3])   # cut inside the last field: every field is still there
+    with pytest.raises(DEMInputError, match=r"heaviside\.csv: the last line \(line 61, data row 60\) does not end"):
+        read_series(path)
+
+
+@pytest.mark.parametrize("column, value, allowed", [
+    ("A_xy", 50.0, r"\[-0\.5, 0\.5\]"), ("A_xx", -0.6, r"\[-0\.5, 0\.5\]"),
+    ("p", 0.0, r"\(0, inf\]"), ("mu", -0.1, r"\[0, 2\]"), ("mu", 7.0, r"\[0, 2\]")])
+def test_a_value_outside_its_physical_range_is_named_with_its_row(tmp_path, column, value, allowed):
+    path = write_run(tmp_path / "preshear.csv")
+    df = pd.read_csv(path)
+    df.loc[11, column] = value
+    df.to_csv(path, index=False)
+    with pytest.raises(DEMInputError, match=rf"preshear\.csv: column '{column}' = {value:g} at data row 12 is "
+                                            rf"outside its physical range {allowed}"):
         read_series(path)
 
 
