@@ -99,14 +99,16 @@ SAFETY, MIN_FACTOR, MAX_FACTOR, POLE_FACTOR = 0.9, 0.2, 10.0, 0.25
 BATCH_RTOL = 1e-10
 BATCH_ATOL = 1e-12
 BATCH_H_MIN = 1e-9           # step (in strain) below which a trajectory counts as stiff and falls back
-BATCH_STEPS_PER_STRAIN = 2000  # step budget: this many attempts per unit of path strain, plus BATCH_MIN_STEPS
-BATCH_MIN_STEPS = 2000
+BATCH_STEPS_PER_STRAIN = 1000  # step budget: this many attempts per unit of path strain, plus BATCH_MIN_STEPS
+BATCH_MIN_STEPS = 1000
+STIFF_STEPS = 500            # a stiff trajectory falls back if the rest of its path needs more steps than this
 
 # Status codes of the batched solver (internal), and the reason each gives for the fallback.
-_RUNNING, _DONE, _POLE_START, _STIFF, _BUDGET, _DIVERGED, _BAD_OUTPUT = range(7)
+_RUNNING, _DONE, _POLE_START, _COLLAPSE, _STIFF, _BUDGET, _DIVERGED, _BAD_OUTPUT = range(8)
 FALLBACK_REASONS = {
     _POLE_START: "X starts at or beyond X_c",
-    _STIFF: "step size collapsed (pole or stiffness)",
+    _COLLAPSE: "step size collapsed (pole)",
+    _STIFF: "stiff (stability-limited steps)",
     _BUDGET: "step budget exceeded (stiff)",
     _DIVERGED: "|A| > 1/sqrt(2)",
     _BAD_OUTPUT: "a reported X at or beyond X_c",
@@ -135,6 +137,14 @@ def _rate(y, co, out):
     np.multiply(al2, b, out=out[1])
     out[1] += co["hg"] * (co["a1"] + co["b1"] * X + co["c1"] * q) - co["g"] * a
     return ~(gap > 0.0)
+
+
+def _combine(c, K):
+    """sum_i c[i] K[i], added row after row: the same bits for a trajectory whatever the batch.
+
+    (A BLAS matrix product would group the sums differently by position in the array.)
+    """
+    return (c.reshape((-1,) + (1,) * (K.ndim - 1)) * K).sum(axis=0)
 
 
 def _rms(x, y):
@@ -167,6 +177,9 @@ class _Solver:
         self.out_s = out_s
         self.key0 = np.concatenate([[0.0], np.cumsum(L + 1.0)])[:-1]
         self.key = self.key0[out_piece] + out_s
+        # path strain after each piece, to the end of its trajectory
+        total = np.repeat(np.add.reduceat(L, poff[:-1]) if len(L) else L, np.diff(poff))
+        self.after = total - (np.cumsum(L) - np.repeat(np.cumsum(L)[poff[:-1]] - L[poff[:-1]], np.diff(poff)))
         self.Y = np.full((len(out_piece), 2), np.nan)
         self.status = np.full(n, _RUNNING)
         self.steps = np.zeros(n, dtype=int)
@@ -176,7 +189,7 @@ class _Solver:
             "gid": np.arange(n), "y": A0.T.copy(), "f": np.zeros((2, n)),
             "k": poff[:-1].copy(), "kend": poff[1:].copy(), "j": ooff[:-1].copy(),
             "s": np.zeros(n), "Lk": np.zeros(n), "h": np.zeros(n), "rej": np.zeros(n, dtype=bool),
-            "n": np.zeros(n, dtype=int), "live": np.ones(n, dtype=bool),
+            "n": np.zeros(n, dtype=int), "nstiff": np.zeros(n, dtype=int), "ncalm": np.zeros(n, dtype=int), "live": np.ones(n, dtype=bool),
             "g": np.ones(n), "hg": np.ones(n), "sq2g": np.ones(n),
             "a1": a1.copy(), "b1": b1.copy(), "c1": c1.copy(), "X_c": X_c.copy(),
             "a2s": a2 / SQRT2, "b2s": b2 / SQRT2, "c2s": c2 / SQRT2,
@@ -286,10 +299,11 @@ class _Solver:
         Kf = K.reshape(_NSTAGES + 1, 2 * n)
         bad = np.zeros(n, dtype=bool)
         for st in range(1, _NSTAGES):
-            bad |= _rate(y + h * (_A[st, :st] @ Kf[:st]).reshape(2, n), co, K[st])
-        yn = y + h * (_B @ Kf[:_NSTAGES]).reshape(2, n)
+            ys = y + h * _combine(_A[st, :st], Kf[:st]).reshape(2, n)
+            bad |= _rate(ys, co, K[st])
+        yn = y + h * _combine(_B, Kf[:_NSTAGES]).reshape(2, n)
         bad |= _rate(yn, co, K[_NSTAGES])
-        e = (_E @ Kf).reshape(2, n) * h / (self.atol + self.rtol * np.maximum(np.abs(y), np.abs(yn)))
+        e = _combine(_E, Kf).reshape(2, n) * h / (self.atol + self.rtol * np.maximum(np.abs(y), np.abs(yn)))
         err = _rms(e[0], e[1])
         bad |= ~np.isfinite(err)
         ok = ~bad & (err <= 1.0)
@@ -300,11 +314,35 @@ class _Solver:
         w["h"] = h * np.where(ok, grow, shrink)
         w["rej"] = ~ok
         w["n"] += live
+        self._stiffness(ok & live, h, K, ys, yn)
         acc = np.flatnonzero(ok & live)
         if len(acc):
             self._accept(acc, K[:, :, acc], y[:, acc], s[acc], h[acc], yn[:, acc], ends[acc])
-        self._stop(np.flatnonzero(live & ~ok & (w["h"] < self.h_min)), _STIFF)
+        self._stop(np.flatnonzero(live & ~ok & (w["h"] < self.h_min)), _COLLAPSE)
         self._stop(np.flatnonzero(w["live"] & (w["n"] > self.max_steps[w["gid"]])), _BUDGET)
+
+    def _stiffness(self, acc, h, K, y6, yn):
+        """Hairer's stiffness test of DOPRI5 on accepted steps (Hairer and Wanner, Solving ODEs II, IV.2).
+
+        The last two stages are both at the step's end, so
+        :math:`\\rho = h |f(y_{new}) - f(y_6)| / |y_{new} - y_6|` estimates h times the
+        largest eigenvalue; :math:`\\rho > 3.25` means the step is limited by stability,
+        not accuracy. Fifteen such accepted steps (fewer than six normal ones in
+        between) mark the trajectory stiff; it falls back to ``simulate`` if the
+        rest of its path would still take more than ``STIFF_STEPS`` steps of the
+        current size (a long steady shear at the stability limit stays in the batch).
+        """
+        w = self.w
+        with np.errstate(all="ignore"):
+            num = np.hypot(K[_NSTAGES, 0] - K[_NSTAGES - 1, 0], K[_NSTAGES, 1] - K[_NSTAGES - 1, 1])
+            rho = h * num / np.hypot(yn[0] - y6[0], yn[1] - y6[1])
+        stiff = acc & (rho > 3.25)
+        calm = acc & ~(rho > 3.25)
+        w["nstiff"] = np.where(stiff, w["nstiff"] + 1, w["nstiff"])
+        w["ncalm"] = np.where(stiff, 0, np.where(calm, w["ncalm"] + 1, w["ncalm"]))
+        w["nstiff"][w["ncalm"] >= 6] = 0
+        left = w["Lk"] - w["s"] + self.after[np.minimum(w["k"], len(self.after) - 1)]
+        self._stop(np.flatnonzero((w["nstiff"] >= 15) & (left > STIFF_STEPS * h)), _STIFF)
 
     def _accept(self, acc, K, y, s, h, yn, ends):
         w = self.w
@@ -312,7 +350,7 @@ class _Solver:
 
         def dense(p, x_s):
             """scipy RK45's dense output: y_old + h sum_q Q_q x^(q+1), x = (s - s_old)/h."""
-            Q = (_P.T @ K.reshape(_NSTAGES + 1, -1)).reshape(-1, 2, len(s))[:, :, p]   # (4, 2, m)
+            Q = np.stack([_combine(_P[:, q], K[:, :, p]) for q in range(_P.shape[1])])   # (4, 2, m)
             hp = h[p]
             x = (x_s - s[p]) / hp
             ya, yb = Q[-1, 0] * x, Q[-1, 1] * x
