@@ -57,15 +57,20 @@ Each trajectory is guarded alone; the others go on:
 - a trial step whose stages ask for :math:`X \ge X_c` (or give a non-finite
   value) is rejected and retried 4 times shorter, as ``model/adaptive.py``
   does;
-- a piece whose first X (a reversal mirrors X to -X) is :math:`\ge X_c`, an
-  accepted state with :math:`|A| > 1/\sqrt2`, a step size that falls below
-  ``h_min`` (near an attracting pole, or where the pole makes Eq. 4 stiff and
-  the explicit method crawls), more than ``max_steps`` steps, or a reported X
-  at or beyond X_c: the trajectory stops in the batch and is handed to the
-  per-trajectory ``model.simulate`` (default LSODA, rtol 1e-10, which switches
-  to BDF where the problem is stiff) with the same history, start and report
-  times. Its table, or its error (``PoleError``, ``FabricDivergence``,
-  ``RuntimeError`` of a step budget) is therefore exactly ``simulate``'s. The
+- an accepted state with :math:`|A| > 1/\sqrt2` (the bound of any fabric)
+  stops the trajectory with ``FabricDivergence``, as ``simulate`` does; its
+  message names the time at which the batch met it;
+- a piece whose first X (a reversal mirrors X to -X) is :math:`\ge X_c`; a
+  step size that falls below ``h_min`` (the approach to an attracting pole); a
+  trajectory found stiff by the test of DOPRI5 (Hairer and Wanner, Solving
+  ODEs II, Sec. IV.2: fifteen steps limited by stability rather than accuracy,
+  as where a repelling pole holds X just below X_c) whose remaining path would
+  take more than ``STIFF_STEPS`` such steps; more than ``max_steps`` steps; or
+  a reported X at or beyond X_c: the trajectory stops in the batch and is
+  handed to the per-trajectory ``model.simulate`` (default LSODA, rtol 1e-10,
+  which switches to BDF where the problem is stiff) with the same history,
+  start and report times. Its table, or its error (``PoleError``, or the
+  ``RuntimeError`` of a step budget), is therefore exactly ``simulate``'s. The
   ``status`` table says which trajectories fell back and why.
 """
 from __future__ import annotations
@@ -110,10 +115,11 @@ FALLBACK_REASONS = {
     _COLLAPSE: "step size collapsed (pole)",
     _STIFF: "stiff (stability-limited steps)",
     _BUDGET: "step budget exceeded (stiff)",
-    _DIVERGED: "|A| > 1/sqrt(2)",
     _BAD_OUTPUT: "a reported X at or beyond X_c",
 }
 _COEFFS = ("a1", "b1", "c1", "a2", "b2", "c2", "X_c")
+# A trajectory stopped for these reasons is integrated again by simulate; a diverged one is not
+# (its FabricDivergence names where the batch met |A| > 1/sqrt2).
 
 
 # --------------------------------------------------------------------------- the array solver
@@ -183,6 +189,7 @@ class _Solver:
         self.Y = np.full((len(out_piece), 2), np.nan)
         self.status = np.full(n, _RUNNING)
         self.steps = np.zeros(n, dtype=int)
+        self.where = np.zeros((n, 4))   # piece, path strain in it, a, b where each trajectory stopped
         self.rtol, self.atol, self.h_min, self.max_steps = rtol, atol, h_min, max_steps
         a1, b1, c1, a2, b2, c2, X_c = coef.T
         self.w = {
@@ -206,8 +213,10 @@ class _Solver:
         """Take slots ``sl`` out of the batch with status ``code``."""
         if len(sl):
             w = self.w
-            self.status[w["gid"][sl]] = code
-            self.steps[w["gid"][sl]] = w["n"][sl]
+            gid = w["gid"][sl]
+            self.status[gid] = code
+            self.steps[gid] = w["n"][sl]
+            self.where[gid] = np.column_stack([w["k"][sl], w["s"][sl], w["y"][0, sl], w["y"][1, sl]])
             w["live"][sl] = False
             w["h"][sl] = 0.0
 
@@ -333,13 +342,12 @@ class _Solver:
         current size (a long steady shear at the stability limit stays in the batch).
         """
         w = self.w
-        with np.errstate(all="ignore"):
-            num = np.hypot(K[_NSTAGES, 0] - K[_NSTAGES - 1, 0], K[_NSTAGES, 1] - K[_NSTAGES - 1, 1])
-            rho = h * num / np.hypot(yn[0] - y6[0], yn[1] - y6[1])
-        stiff = acc & (rho > 3.25)
-        calm = acc & ~(rho > 3.25)
-        w["nstiff"] = np.where(stiff, w["nstiff"] + 1, w["nstiff"])
-        w["ncalm"] = np.where(stiff, 0, np.where(calm, w["ncalm"] + 1, w["ncalm"]))
+        dK = K[_NSTAGES] - K[_NSTAGES - 1]
+        dy = yn - y6
+        stiff = (h * h * (dK[0] * dK[0] + dK[1] * dK[1]) > 3.25**2 * (dy[0] * dy[0] + dy[1] * dy[1])) & acc
+        w["nstiff"] += stiff
+        w["ncalm"] += acc & ~stiff
+        w["ncalm"][stiff] = 0
         w["nstiff"][w["ncalm"] >= 6] = 0
         left = w["Lk"] - w["s"] + self.after[np.minimum(w["k"], len(self.after) - 1)]
         self._stop(np.flatnonzero((w["nstiff"] >= 15) & (left > STIFF_STEPS * h)), _STIFF)
@@ -348,20 +356,24 @@ class _Solver:
         w = self.w
         s_new = np.where(ends, w["Lk"][acc], s + h)
 
+        Q = []
+
         def dense(p, x_s):
             """scipy RK45's dense output: y_old + h sum_q Q_q x^(q+1), x = (s - s_old)/h."""
-            Q = np.stack([_combine(_P[:, q], K[:, :, p]) for q in range(_P.shape[1])])   # (4, 2, m)
+            if not Q:   # (4, 2, len(acc)), once per step
+                Q.append((_P.T[:, :, None] * K.reshape(_NSTAGES + 1, -1)[None]).sum(axis=1).reshape(-1, 2, len(s)))
+            Qp = Q[0][:, :, p]
             hp = h[p]
             x = (x_s - s[p]) / hp
-            ya, yb = Q[-1, 0] * x, Q[-1, 1] * x
-            for q in range(Q.shape[0] - 2, -1, -1):                # Horner
-                ya = (ya + Q[q, 0]) * x
-                yb = (yb + Q[q, 1]) * x
+            ya, yb = Qp[-1, 0] * x, Qp[-1, 1] * x
+            for q in range(Qp.shape[0] - 2, -1, -1):               # Horner
+                ya = (ya + Qp[q, 0]) * x
+                yb = (yb + Qp[q, 1]) * x
             return y[0, p] + hp * ya, y[1, p] + hp * yb
 
         self._fill(acc, s_new, dense)
         w["y"][:, acc], w["s"][acc], w["f"][:, acc] = yn, s_new, K[_NSTAGES]
-        diverged = 2.0 * (yn[0] ** 2 + yn[1] ** 2) > 0.5        # |A| > 1/sqrt2
+        diverged = ~(yn[0] ** 2 + yn[1] ** 2 <= 0.25)           # |A| > 1/sqrt2, as rhs.make_rate
         self._stop(acc[diverged], _DIVERGED)
         fin = acc[ends & ~diverged]
         if len(fin):
@@ -633,10 +645,16 @@ def simulate_batch(params, histories, model="model1", A0=None, friction="eq2", s
     code[(code == _DONE) & bad_traj] = _BAD_OUTPUT
 
     # the trajectories the batch did not finish: simulate, one by one
-    solver_name = np.where(code == _DONE, "batched", "simulate").astype(object)
+    in_batch = (code == _DONE) | (code == _DIVERGED)
+    solver_name = np.where(in_batch, "batched", "simulate").astype(object)
     reason = np.array([FALLBACK_REASONS.get(c, "") for c in code], dtype=object)
     start = np.concatenate([[0], np.cumsum(rows)[:-1]])
-    for i in np.flatnonzero(code != _DONE):
+    for i in np.flatnonzero(code == _DIVERGED):
+        if errors[i] is None:
+            k, s_k, a_k, b_k = solver.where[i]
+            seg = lists["histories"][i].segments[int(k) - poff[i]]
+            errors[i] = FabricDivergence(_time_at(seg, s_k), a_k, b_k)
+    for i in np.flatnonzero(~in_batch):
         if errors[i] is not None:
             continue
         try:
@@ -664,6 +682,16 @@ def simulate_batch(params, histories, model="model1", A0=None, friction="eq2", s
         "message": ["" if e is None else str(e) for e in errors],
     })
     return BatchResult(table, status, errors, stop - kept_rows, stop)
+
+
+def _time_at(seg, s):
+    """Time at which a simple-shear segment (or a rest) has gone through the path strain ``s``."""
+    if not isinstance(seg, ShearSegment):
+        return seg.t0
+    if seg.kind == "constant":
+        return seg.t0 + s / abs(seg.p[0])
+    tt = np.linspace(seg.t0, seg.t1, 2001)
+    return float(np.interp(s, np.abs(seg.strain(tt)), tt))
 
 
 def _status_word(err):
