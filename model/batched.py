@@ -628,11 +628,12 @@ def simulate_batch(params, histories, model="model1", A0=None, friction="eq2", s
     g_row = gflat[out_piece]
     a, b = Y[:, 0], Y[:, 1]
     X = SQRT2 * g_row * b
-    fr_row = fric[traj]
-    is_eq2 = np.repeat(np.array([f == "eq2" for f in lists["friction"]]), rows)
+    tau = np.empty_like(X)
     with np.errstate(all="ignore"):
-        tau = np.where(is_eq2, laws.stress_ratio_eq2(X, fr_row[:, 0], fr_row[:, 1], fr_row[:, 2], fr_row[:, 3]),
-                       laws.friction_quadratic(X, fr_row[:, 0], fr_row[:, 1], fr_row[:, 2]))
+        for name, law, nargs in (("eq2", laws.stress_ratio_eq2, 4), ("quadratic", laws.friction_quadratic, 3)):
+            sel = np.repeat(np.array([f == name for f in lists["friction"]]), rows)
+            if sel.any():
+                tau[sel] = law(X[sel], *(np.repeat(fric[:, c], rows)[sel] for c in range(nargs)))
     gd = np.concatenate([x.gammadot for x in lays])
     cols = {
         "trajectory": traj, "t": np.concatenate([x.t for x in lays]),
@@ -640,7 +641,7 @@ def simulate_batch(params, histories, model="model1", A0=None, friction="eq2", s
         "A_norm": laws.fabric_norm(a, b), "theta_A": laws.fabric_angle_deg(a, b), "X": X, "mu": np.abs(tau),
         "sigma_xy_over_p": np.where(gd != 0.0, tau * g_row, 0.0),
     }
-    bad_row = ~(X < coef[traj, 6]) | ~np.isfinite(a) | ~np.isfinite(b) | ~np.isfinite(tau)
+    bad_row = ~(X < np.repeat(coef[:, 6], rows)) | ~np.isfinite(a) | ~np.isfinite(b) | ~np.isfinite(tau)
     bad_traj = np.bincount(traj[bad_row], minlength=n) > 0
     code[(code == _DONE) & bad_traj] = _BAD_OUTPUT
 
@@ -670,9 +671,10 @@ def simulate_batch(params, histories, model="model1", A0=None, friction="eq2", s
         for c in COLUMNS:
             cols[c][sl] = tab[c].to_numpy()
     failed = np.array([e is not None for e in errors])
-    table = pd.DataFrame(cols, columns=["trajectory"] + COLUMNS, copy=False)   # no 2D block copy
     if failed.any():
-        table = table[~failed[traj]].reset_index(drop=True)
+        keep = ~failed[traj]
+        cols = {c: v[keep] for c, v in cols.items()}
+    table = pd.DataFrame(cols, columns=["trajectory"] + COLUMNS, copy=False)   # no 2D block copy
     kept_rows = np.where(failed, 0, rows)
     stop = np.cumsum(kept_rows)
     status = pd.DataFrame({
