@@ -499,13 +499,26 @@ def _per_trajectory(name, value, n_or_none, single):
     return value
 
 
+def _is_number(x):
+    return x is not None and np.ndim(x) == 0
+
+
 def _is_grid(v):
-    return v is None or (np.ndim(v) == 1 and not isinstance(v, (list, tuple)) or
-                         (isinstance(v, (list, tuple)) and all(np.ndim(x) == 0 for x in v)))
+    """One report grid (None or numbers), as opposed to a sequence of grids."""
+    if v is None:
+        return True
+    if isinstance(v, (list, tuple)):
+        return all(_is_number(x) for x in v)
+    return np.ndim(v) == 1
 
 
 def _is_pair(v):
-    return v is None or np.shape(v) == (2,)
+    """One A0 (None or two numbers), as opposed to a sequence of them."""
+    if v is None:
+        return True
+    if isinstance(v, (list, tuple)):
+        return len(v) == 2 and all(_is_number(x) for x in v)
+    return np.shape(v) == (2,)
 
 
 def simulate_batch(params, histories, model="model1", A0=None, friction="eq2", strain_eval=None, t_eval=None,
