@@ -16,9 +16,11 @@ steady state of the calibrated set (one per model), as a DEM run's pre-reversal
 state is not exactly a trial set's own steady state. Eq. 2 and the quadratic law
 are the defaults of ``model.params``.
 
-For the first ``--reference`` trajectories (default 10) both integrators are
-also compared with a Radau reference at rtol 1e-13 (columns ``ref_err_*``), which
-says which of the two a deviation comes from.
+Times are medians of interleaved repeats (5 for N <= 60, fewer above), wall
+and CPU (``*_cpu_s``: this process only, less sensitive to a shared machine).
+For the ``--reference`` trajectories (default 10) on which the two integrators
+differ most, both are also compared with Radau at rtol 1e-13 (columns
+``ref_err_*``): that says which of the two a deviation comes from.
 """
 from __future__ import annotations
 
@@ -70,32 +72,46 @@ def _deviation(a, b):
     return {q: float(np.max(np.abs(a[q].to_numpy() - b[q].to_numpy()))) for q in QUANTITIES}
 
 
-def measure(n, history, reference=10, seed=0):
-    """One row of the table: batched and looped wall time, ratio, deviations, statuses."""
-    traj = trajectories(n, seed)
-    P, M, F, A0 = (list(x) for x in zip(*traj))
-    t0 = time.perf_counter()
-    batch = simulate_batch(P, history, model=M, A0=A0, friction=F)
-    t_batch = time.perf_counter() - t0
-    loop, t0 = [], time.perf_counter()
+def _timed(run):
+    w, c = time.perf_counter(), time.process_time()
+    out = run()
+    return out, time.perf_counter() - w, time.process_time() - c
+
+
+def _loop(traj, history):
+    out = []
     for p, m, f, a0 in traj:
         try:
-            loop.append(simulate(p, history, model=m, A0=a0, friction=f))
+            out.append(simulate(p, history, model=m, A0=a0, friction=f))
         except (ValueError, FloatingPointError, RuntimeError) as exc:
-            loop.append(exc)
-    t_loop = time.perf_counter() - t0
+            out.append(exc)
+    return out
 
-    dev = dict.fromkeys(QUANTITIES, 0.0)
+
+def measure(n, history, reference=10, seed=0, repeats=None):
+    """One row of the table: batched and looped times (median of interleaved repeats), deviations, statuses."""
+    traj = trajectories(n, seed)
+    P, M, F, A0 = (list(x) for x in zip(*traj))
+    repeats = repeats or max(1, min(5, 300 // n))
+    times = {"batched": [], "loop": []}
+    for _ in range(repeats):     # interleaved, so that both see the same load of a shared machine
+        batch, wall, cpu = _timed(lambda: simulate_batch(P, history, model=M, A0=A0, friction=F))
+        times["batched"].append((wall, cpu))
+        loop, wall, cpu = _timed(lambda: _loop(traj, history))
+        times["loop"].append((wall, cpu))
+    med = {k: np.median(np.array(v), axis=0) for k, v in times.items()}
+
+    dev = np.zeros((n, len(QUANTITIES)))
     agree = True
     for i, ref in enumerate(loop):
         ok = batch.errors[i] is None
         agree &= ok == isinstance(ref, pd.DataFrame)
         if ok and isinstance(ref, pd.DataFrame):
-            for q, v in _deviation(batch.trajectory(i), ref).items():
-                dev[q] = max(dev[q], v)
+            dev[i] = list(_deviation(batch.trajectory(i), ref).values())
+    # the trajectories where the two disagree most, against Radau: which of the two the deviation comes from
     ref_err = {f"ref_err_{who}_{q}": 0.0 for who in ("batched", "lsoda") for q in QUANTITIES}
-    for i in range(min(reference, n)):
-        if batch.errors[i] is not None or not isinstance(loop[i], pd.DataFrame):
+    for i in np.argsort(-dev.max(axis=1))[:min(reference, n)]:
+        if not dev[i].any():
             continue
         p, m, f, a0 = traj[i]
         radau = simulate(p, history, model=m, A0=a0, friction=f, method="Radau", rtol=1e-13, atol=1e-15)
@@ -104,10 +120,11 @@ def measure(n, history, reference=10, seed=0):
                 ref_err[f"ref_err_{who}_{q}"] = max(ref_err[f"ref_err_{who}_{q}"], v)
     st = batch.status
     return {
-        "N": n, "n_model1": M.count("model1"), "n_model2": M.count("model2"),
-        "rows_per_trajectory": len(batch.table) // max(1, int(batch.ok.sum())) if batch.ok.any() else 0,
-        "batched_s": t_batch, "loop_s": t_loop, "speedup": t_loop / t_batch,
-        "max_dev_A_norm": dev["A_norm"], "max_dev_theta_A_deg": dev["theta_A"], "max_dev_mu": dev["mu"],
+        "N": n, "n_model1": M.count("model1"), "n_model2": M.count("model2"), "repeats": repeats,
+        "batched_s": med["batched"][0], "loop_s": med["loop"][0], "speedup": med["loop"][0] / med["batched"][0],
+        "batched_cpu_s": med["batched"][1], "loop_cpu_s": med["loop"][1],
+        "speedup_cpu": med["loop"][1] / med["batched"][1],
+        "max_dev_A_norm": dev[:, 0].max(), "max_dev_theta_A_deg": dev[:, 1].max(), "max_dev_mu": dev[:, 2].max(),
         "n_fallback": int((st.solver != "batched").sum()), "n_failed": int((st.status != "ok").sum()),
         "status_agrees": bool(agree), "n_reference": min(reference, n), **ref_err,
     }
@@ -119,19 +136,22 @@ def main(argv=None):
     ap.add_argument("--out", default="results/accuracy", help="output folder (default: %(default)s)")
     ap.add_argument("--sizes", type=int, nargs="+", default=list(SIZES), help="batch sizes (default: %(default)s)")
     ap.add_argument("--reference", type=int, default=10,
-                    help="trajectories also compared with Radau at rtol 1e-13 (default: %(default)s)")
+                    help="trajectories (those where the two differ most) also compared with Radau at rtol 1e-13 "
+                         "(default: %(default)s)")
+    ap.add_argument("--repeats", type=int, default=None,
+                    help="interleaved repeats per size (default: 5 for N <= 60, 300 // N above, at least 1)")
     ap.add_argument("--seed", type=int, default=0)
     args = ap.parse_args(argv)
-    if any(n < 1 for n in args.sizes) or args.reference < 0:
-        ap.error("--sizes must be >= 1 and --reference >= 0")
+    if any(n < 1 for n in args.sizes) or args.reference < 0 or (args.repeats is not None and args.repeats < 1):
+        ap.error("--sizes and --repeats must be >= 1, --reference >= 0")
     history = steady_shear(STRAIN_AFTER, -1.0)
     simulate_batch(calibrated_params(), history, A0=(0.0, -0.05))     # warm up imports and caches
     rows = []
     for n in args.sizes:
-        rows.append(measure(n, history, args.reference, args.seed))
+        rows.append(measure(n, history, args.reference, args.seed, args.repeats))
         r = rows[-1]
         print(f"N = {n:5d}: batched {r['batched_s']:.3f} s, loop of simulate {r['loop_s']:.3f} s, "
-              f"speedup {r['speedup']:.1f}x, max deviation |A| {r['max_dev_A_norm']:.1e}, "
+              f"speedup {r['speedup']:.1f}x (CPU {r['speedup_cpu']:.1f}x), max deviation |A| {r['max_dev_A_norm']:.1e}, "
               f"theta_A {r['max_dev_theta_A_deg']:.1e} deg, mu {r['max_dev_mu']:.1e}, "
               f"fallbacks {r['n_fallback']}, failed {r['n_failed']}", flush=True)
     df = pd.DataFrame(rows)
