@@ -125,24 +125,36 @@ _COEFFS = ("a1", "b1", "c1", "a2", "b2", "c2", "X_c")
 # --------------------------------------------------------------------------- the array solver
 
 
-def _rate(y, co, out):
+def _rate(y, co, out, pole=True):
     r"""d(a, b)/ds of the module Notes for the states ``y`` (shape (2, n)), written to ``out``.
 
-    Returns the mask of trajectories where Eq. 6 is undefined (X >= X_c). Model 2 rows have
-    X_c = inf and no pole coefficients, so the pole term is 0 there.
+    ``co`` holds per trajectory the coefficients of the current piece: ``gs = (g, -g)``,
+    ``sq2g`` = sqrt2 g, ``a2s, b2g, c2s`` = (a2, b2 sqrt2 g, c2)/sqrt2 and ``ha1, hb1g, hc1``
+    = (a1, b1 sqrt2 g, c1) g/2, so that
+    :math:`\alpha_2/\sqrt2 = a_{2s} + b_{2g} b + c_{2s} q` and
+    :math:`g\alpha_1/2 = h_{a1} + h_{b1g} b + h_{c1} q` with :math:`q = X_+^4/(X_c - X)`.
+    Returns the mask of trajectories where Eq. 6 is undefined (X >= X_c), or None when no
+    trajectory has a pole (``pole=False``: all Model 2, whose q is 0 and is skipped).
     """
-    a, b = y[0], y[1]
-    X = co["sq2g"] * b                               # X = sqrt2 g b
-    pos = np.maximum(X, 0.0)
-    p2 = pos * pos
-    gap = co["X_c"] - X
-    q = p2 * p2 / gap                                # X^4 / (X_c - X) for X > 0
-    al2 = co["a2s"] + co["b2s"] * X + co["c2s"] * q  # alpha2 / sqrt2
-    np.multiply(al2, a, out=out[0])
-    out[0] += co["g"] * b
-    np.multiply(al2, b, out=out[1])
-    out[1] += co["hg"] * (co["a1"] + co["b1"] * X + co["c1"] * q) - co["g"] * a
-    return ~(gap > 0.0)
+    b = y[1]
+    if pole:
+        X = co["sq2g"] * b
+        gap = co["X_c"] - X
+        q = np.maximum(X, 0.0)
+        q *= q
+        q *= q
+        q /= gap                                     # X^4 / (X_c - X) for X > 0; 0 for Model 2
+        al2 = co["c2s"] * q
+        al2 += co["a2s"]
+        t1 = co["hc1"] * q
+        t1 += co["ha1"]
+    else:
+        al2, t1 = co["a2s"], co["ha1"]
+    al2 = al2 + co["b2g"] * b                        # alpha2 / sqrt2
+    np.multiply(al2, y, out=out)                     # alpha2 (a, b) / sqrt2
+    out += co["gs"] * y[::-1]                        # + (g b, -g a)
+    out[1] += t1 + co["hb1g"] * b                    # + g alpha1 / 2
+    return gap <= 0.0 if pole else None
 
 
 def _combine(c, K):
@@ -190,24 +202,25 @@ class _Solver:
         self.status = np.full(n, _RUNNING)
         self.steps = np.zeros(n, dtype=int)
         self.where = np.zeros((n, 4))   # piece, path strain in it, a, b where each trajectory stopped
-        self.rtol, self.atol, self.h_min, self.max_steps = rtol, atol, h_min, max_steps
+        self.rtol, self.atol, self.h_min = rtol, atol, h_min
+        self.pole = bool(np.isfinite(coef[:, 6]).any())
         a1, b1, c1, a2, b2, c2, X_c = coef.T
         self.w = {
             "gid": np.arange(n), "y": A0.T.copy(), "f": np.zeros((2, n)),
             "k": poff[:-1].copy(), "kend": poff[1:].copy(), "j": ooff[:-1].copy(),
             "s": np.zeros(n), "Lk": np.zeros(n), "h": np.zeros(n), "rej": np.zeros(n, dtype=bool),
             "n": np.zeros(n, dtype=int), "nstiff": np.zeros(n, dtype=int), "ncalm": np.zeros(n, dtype=int), "live": np.ones(n, dtype=bool),
-            "g": np.ones(n), "hg": np.ones(n), "sq2g": np.ones(n),
             "a1": a1.copy(), "b1": b1.copy(), "c1": c1.copy(), "X_c": X_c.copy(),
-            "a2s": a2 / SQRT2, "b2s": b2 / SQRT2, "c2s": c2 / SQRT2,
+            "a2s": a2 / SQRT2, "b2s": b2 / SQRT2, "c2s": c2 / SQRT2, "maxn": np.asarray(max_steps).copy(),
+            **{c: np.ones(n) for c in ("sq2g", "b2g", "ha1", "hb1g", "hc1")}, "gs": np.ones((2, n)),
         }
         with np.errstate(all="ignore"):
             self._enter(np.arange(n))
 
     def _co(self, sl=None):
         w = self.w
-        keys = ("sq2g", "X_c", "a2s", "b2s", "c2s", "g", "hg", "a1", "b1", "c1")
-        return {c: w[c] for c in keys} if sl is None else {c: w[c][sl] for c in keys}
+        keys = ("sq2g", "X_c", "a2s", "b2g", "c2s", "gs", "ha1", "hb1g", "hc1")
+        return {c: w[c] for c in keys} if sl is None else {c: w[c][..., sl] for c in keys}
 
     def _stop(self, sl, code):
         """Take slots ``sl`` out of the batch with status ``code``."""
@@ -253,7 +266,10 @@ class _Solver:
             sl = sl[~done]
             k = w["k"][sl]
             g = self.g_all[k]
-            w["g"][sl], w["hg"][sl], w["sq2g"][sl] = g, 0.5 * g, SQRT2 * g
+            w["gs"][0, sl], w["gs"][1, sl], w["sq2g"][sl] = g, -g, SQRT2 * g
+            w["b2g"][sl] = w["b2s"][sl] * w["sq2g"][sl]
+            w["ha1"][sl], w["hc1"][sl] = 0.5 * g * w["a1"][sl], 0.5 * g * w["c1"][sl]
+            w["hb1g"][sl] = 0.5 * g * w["b1"][sl] * w["sq2g"][sl]
             w["Lk"][sl], w["s"][sl] = self.L_all[k], 0.0
             pole = ~(w["sq2g"][sl] * w["y"][1, sl] < w["X_c"][sl])   # a reversal mirrors X past X_c
             self._stop(sl[pole], _POLE_START)
@@ -272,11 +288,12 @@ class _Solver:
         w, rtol, atol = self.w, self.rtol, self.atol
         y, co = w["y"][:, sl], self._co(sl)
         f, f1 = np.empty_like(y), np.empty_like(y)
-        _rate(y, co, f)
+        _rate(y, co, f, self.pole)
         sc = atol + np.abs(y) * rtol
         d0, d1 = _rms(*(y / sc)), _rms(*(f / sc))
         h0 = np.where((d0 < 1e-5) | (d1 < 1e-5), 1e-6, 0.01 * d0 / d1)
-        bad = _rate(y + h0 * f, co, f1)
+        bad = _rate(y + h0 * f, co, f1, self.pole)
+        bad = np.zeros(len(sl), dtype=bool) if bad is None else bad
         d2 = _rms(*((f1 - f) / sc)) / h0
         dm = np.maximum(d1, d2)
         h1 = np.where(dm <= 1e-15, np.maximum(1e-6, h0 * 1e-3), (0.01 / dm) ** (1.0 / 5.0))
@@ -300,37 +317,52 @@ class _Solver:
     def _step(self):
         w = self.w
         n = len(w["s"])
-        y, co, s, Lk, live = w["y"], self._co(), w["s"], w["Lk"], w["live"]
-        h = np.minimum(w["h"], Lk - s)                 # 0 for stopped slots
-        ends = h >= Lk - s
+        y, co, s, Lk, live, pole = w["y"], self._co(), w["s"], w["Lk"], w["live"], self.pole
+        rest = Lk - s
+        h = np.minimum(w["h"], rest)                   # 0 for stopped slots
+        ends = h >= rest
         K = np.empty((_NSTAGES + 1, 2, n))
         K[0] = w["f"]
         Kf = K.reshape(_NSTAGES + 1, 2 * n)
         bad = np.zeros(n, dtype=bool)
         for st in range(1, _NSTAGES):
             ys = y + h * _combine(_A[st, :st], Kf[:st]).reshape(2, n)
-            bad |= _rate(ys, co, K[st])
+            if pole:
+                bad |= _rate(ys, co, K[st])
+            else:
+                _rate(ys, co, K[st], False)
         yn = y + h * _combine(_B, Kf[:_NSTAGES]).reshape(2, n)
-        bad |= _rate(yn, co, K[_NSTAGES])
-        e = _combine(_E, Kf).reshape(2, n) * h / (self.atol + self.rtol * np.maximum(np.abs(y), np.abs(yn)))
-        err = _rms(e[0], e[1])
-        bad |= ~np.isfinite(err)
-        ok = ~bad & (err <= 1.0)
-        fac = SAFETY * err ** _ERR_EXP
-        grow = np.where(err == 0.0, MAX_FACTOR, np.minimum(MAX_FACTOR, fac))
-        grow = np.where(w["rej"], np.minimum(1.0, grow), grow)
-        shrink = np.where(bad, POLE_FACTOR, np.maximum(MIN_FACTOR, fac))
-        w["h"] = h * np.where(ok, grow, shrink)
+        if pole:
+            bad |= _rate(yn, co, K[_NSTAGES])
+        else:
+            _rate(yn, co, K[_NSTAGES], False)
+        e = _combine(_E, Kf).reshape(2, n) * h
+        e /= np.maximum(np.abs(y), np.abs(yn)) * self.rtol + self.atol
+        e *= e
+        err = np.sqrt(0.5 * e.sum(axis=0))             # RMS norm, as scipy
+        ok = (err <= 1.0) & ~bad                       # NaN err: not ok
+        # scipy's controller: factor in [0.2, 10], none above 1 right after a rejection
+        fac = np.clip(SAFETY * err ** _ERR_EXP, MIN_FACTOR, MAX_FACTOR)
+        fac = np.where(w["rej"] & ok, np.minimum(1.0, fac), fac)
+        fac[bad | np.isnan(err)] = POLE_FACTOR
+        w["h"] = h * fac
         w["rej"] = ~ok
         w["n"] += live
-        self._stiffness(ok & live, h, K, ys, yn)
-        acc = np.flatnonzero(ok & live)
-        if len(acc):
+        ok &= live
+        dK, dy = K[_NSTAGES] - K[_NSTAGES - 1], yn - ys    # for the stiffness test, before K is reused
+        acc = np.flatnonzero(ok)
+        if len(acc) == n:                              # all accepted: no gathers
+            self._accept(acc, K, y, s, h, yn, ends)
+        elif len(acc):
             self._accept(acc, K[:, :, acc], y[:, acc], s[acc], h[acc], yn[:, acc], ends[acc])
-        self._stop(np.flatnonzero(live & ~ok & (w["h"] < self.h_min)), _COLLAPSE)
-        self._stop(np.flatnonzero(w["live"] & (w["n"] > self.max_steps[w["gid"]])), _BUDGET)
+        self._stiffness(ok, h, dK, dy)
+        if len(acc) < n:
+            self._stop(np.flatnonzero(w["live"] & ~ok & (w["h"] < self.h_min)), _COLLAPSE)
+        over = w["n"] > w["maxn"]
+        if over.any():
+            self._stop(np.flatnonzero(w["live"] & over), _BUDGET)
 
-    def _stiffness(self, acc, h, K, y6, yn):
+    def _stiffness(self, acc, h, dK, dy):
         """Hairer's stiffness test of DOPRI5 on accepted steps (Hairer and Wanner, Solving ODEs II, IV.2).
 
         The last two stages are both at the step's end, so
@@ -342,15 +374,15 @@ class _Solver:
         current size (a long steady shear at the stability limit stays in the batch).
         """
         w = self.w
-        dK = K[_NSTAGES] - K[_NSTAGES - 1]
-        dy = yn - y6
         stiff = (h * h * (dK[0] * dK[0] + dK[1] * dK[1]) > 3.25**2 * (dy[0] * dy[0] + dy[1] * dy[1])) & acc
         w["nstiff"] += stiff
         w["ncalm"] += acc & ~stiff
         w["ncalm"][stiff] = 0
         w["nstiff"][w["ncalm"] >= 6] = 0
-        left = w["Lk"] - w["s"] + self.after[np.minimum(w["k"], len(self.after) - 1)]
-        self._stop(np.flatnonzero((w["nstiff"] >= 15) & (left > STIFF_STEPS * h)), _STIFF)
+        suspect = (w["nstiff"] >= 15) & w["live"]
+        if suspect.any():
+            left = w["Lk"] - w["s"] + self.after[np.minimum(w["k"], len(self.after) - 1)]
+            self._stop(np.flatnonzero(suspect & (left > STIFF_STEPS * h)), _STIFF)
 
     def _accept(self, acc, K, y, s, h, yn, ends):
         w = self.w
