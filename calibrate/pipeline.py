@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from dem_contract import fabric_angle_deg, fabric_norm
 from model import default_params, params_from_dict, steady_state
 
 from . import backsolve, bootstrap, figures, fits, io, route1, route2, smoothing, tables
@@ -91,8 +92,7 @@ def steady_check(doc) -> dict:
     for model in ("model1", "model2"):
         try:
             a, b, X = steady_state(prm, model)
-            out[model] = {"A_norm": float(np.sqrt(2 * (a * a + b * b))),
-                          "theta_A": float(np.mod(np.degrees(0.5 * np.arctan2(b, a)), 180)), "X": float(X)}
+            out[model] = {"A_norm": float(fabric_norm(a, b)), "theta_A": float(fabric_angle_deg(a, b)), "X": float(X)}
         except ValueError as exc:
             out[model] = {"error": str(exc)}
     return out
