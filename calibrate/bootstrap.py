@@ -127,11 +127,13 @@ def _heldout_scores(k, doc1, doc2, held_reps, sigma_mu, settings_route2) -> list
     out = []
     if not held_reps:
         return out
-    for route, doc in (("backsolve", doc1), ("curves", doc2)):
-        prm = params_from_dict(doc, source=f"bootstrap {k} {route}")
-        for model in ("model1", "model2"):
-            sc = route2.score(prm, held_reps, model, settings_route2, sigma_mu)
-            out.append({"replicate": k, "route": route, "model": model, "n_heldout_runs": len(held_reps), **sc})
+    keys = [(route, doc, model) for route, doc in (("backsolve", doc1), ("curves", doc2))
+            for model in ("model1", "model2")]
+    prms = {route: params_from_dict(doc, source=f"bootstrap {k} {route}") for route, doc, _ in keys}
+    scores = route2.score_many([(prms[route], model) for route, _, model in keys], held_reps, settings_route2,
+                               sigma_mu)   # the four (route, model) pairs in one batch
+    for (route, _, model), sc in zip(keys, scores):
+        out.append({"replicate": k, "route": route, "model": model, "n_heldout_runs": len(held_reps), **sc})
     return out
 
 
