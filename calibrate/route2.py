@@ -48,6 +48,7 @@ are unaffected.
 """
 from __future__ import annotations
 
+import threading
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
@@ -233,44 +234,134 @@ def curves(items, replays, settings: Route2Settings) -> list:
 
 
 def _curves_batched(items, replays, settings: Route2Settings) -> list:
-    """``curves`` by one ``simulate_batch`` call over every (item, distinct run)."""
+    """``curves`` by one ``simulate_batch`` call over every (item, distinct run); in lockstep when one runs."""
     if not items:
         return []
-    unique = {}
-    for r in replays:
-        unique.setdefault(_replay_key(r), r)
-    keys, runs = list(unique), list(unique.values())
-    grids = [_report_grid(r) for r in runs]
-    n_runs = len(runs)
-    P, M, F = [], [], []
-    for prm, model, friction in items:
-        P += [prm] * n_runs
-        M += [model] * n_runs
-        F += [friction] * n_runs
-    res = simulate_batch(P, [g[0] for g in grids] * len(items), model=M, friction=F,
-                         A0=[tuple(r.A0) for r in runs] * len(items), t_eval=[g[1] for g in grids] * len(items),
-                         rtol=settings.rtol, atol=settings.atol, fallback_method=settings.method,
-                         fallback_rtol=settings.rtol, fallback_atol=settings.atol,
+    if getattr(_LOCKSTEP, "current", None) is not None:
+        return _LOCKSTEP.current.submit((items, replays, settings))
+    return _integrate_requests([(items, replays, settings)])[0]
+
+
+def _integrate_requests(requests) -> list:
+    """``curves`` of several requests (items, replays, settings; same tolerances) in one ``simulate_batch`` call.
+
+    A trajectory's numbers do not depend on the rest of its batch
+    (model/README.md), so each request gets what it would get alone.
+    """
+    settings = requests[0][2]
+    P, H, M, F, A0, T, plan, n = [], [], [], [], [], [], [], 0
+    for items, replays, _ in requests:
+        unique = {}
+        for r in replays:
+            unique.setdefault(_replay_key(r), r)
+        keys, runs = list(unique), list(unique.values())
+        grids = [_report_grid(r) for r in runs]
+        for prm, model, friction in items:
+            P += [prm] * len(runs)
+            M += [model] * len(runs)
+            F += [friction] * len(runs)
+            H += [g[0] for g in grids]
+            T += [g[1] for g in grids]
+            A0 += [tuple(r.A0) for r in runs]
+        plan.append((n, keys, grids, len(items), replays))
+        n += len(items) * len(runs)
+    res = simulate_batch(P, H, model=M, friction=F, A0=A0, t_eval=T, rtol=settings.rtol, atol=settings.atol,
+                         fallback_method=settings.method, fallback_rtol=settings.rtol, fallback_atol=settings.atol,
                          fallback_max_steps=settings.max_steps)
     traj = res.table["trajectory"].to_numpy()
     vals = res.table[["A_xx", "A_xy", "sigma_xy_over_p"]].to_numpy()
-    n = len(items) * n_runs
     lo = np.searchsorted(traj, np.arange(n), side="left")
     hi = np.searchsorted(traj, np.arange(n), side="right")
-    out = []
-    for j in range(len(items)):
-        idx = range(j * n_runs, (j + 1) * n_runs)
-        err = next((res.errors[i] for i in idx if res.errors[i] is not None), None)
-        if err is not None:
-            out.append(err)
-            continue
-        by_key = {}
-        for k, i in enumerate(idx):
-            m = np.empty((hi[i] - lo[i], 3))
-            m[grids[k][2]] = vals[lo[i]:hi[i]]
-            by_key[keys[k]] = m
-        out.append([_signed(by_key[_replay_key(r)], r) for r in replays])
-    return out
+    outs = []
+    for first, keys, grids, n_items, replays in plan:
+        out, n_runs = [], len(keys)
+        for j in range(n_items):
+            idx = range(first + j * n_runs, first + (j + 1) * n_runs)
+            err = next((res.errors[i] for i in idx if res.errors[i] is not None), None)
+            if err is not None:
+                out.append(err)
+                continue
+            by_key = {}
+            for k, i in enumerate(idx):
+                m = np.empty((hi[i] - lo[i], 3))
+                m[grids[k][2]] = vals[lo[i]:hi[i]]
+                by_key[keys[k]] = m
+            out.append([_signed(by_key[_replay_key(r)], r) for r in replays])
+        outs.append(out)
+    return outs
+
+
+class Lockstep:
+    """Run jobs in threads whose batched ``curves`` requests are integrated together, one batch per round.
+
+    Each job (e.g. one bootstrap replicate's fits) runs in its own thread; when
+    every job still running is waiting on a ``curves`` request, the last to
+    arrive integrates all requests in one ``simulate_batch`` call and hands
+    each its part. A job's results are those it gets alone (the batch's
+    trajectories are independent), so ``run`` returns what running the jobs one
+    after the other would; only the number of numpy passes changes.
+    """
+
+    def __init__(self):
+        self._cv = threading.Condition()
+        self._pending, self._active = [], 0
+
+    def run(self, jobs) -> list:
+        """Call every job (a callable without arguments) in its own thread; their results, or raise the first error."""
+        results, errors = [None] * len(jobs), [None] * len(jobs)
+        self._active = len(jobs)
+
+        def work(k):
+            _LOCKSTEP.current = self
+            try:
+                results[k] = jobs[k]()
+            except BaseException as exc:   # re-raised below, in the caller's thread
+                errors[k] = exc
+            finally:
+                _LOCKSTEP.current = None
+                with self._cv:
+                    self._active -= 1
+                    self._flush_if_ready()
+
+        threads = [threading.Thread(target=work, args=(k,), daemon=True) for k in range(len(jobs))]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+        for e in errors:
+            if e is not None:
+                raise e
+        return results
+
+    def submit(self, request):
+        slot = {"request": request}
+        with self._cv:
+            self._pending.append(slot)
+            self._flush_if_ready()
+            self._cv.wait_for(lambda: "out" in slot)
+        if isinstance(slot["out"], BaseException):
+            raise slot["out"]
+        return slot["out"]
+
+    def _flush_if_ready(self):
+        if not self._pending or len(self._pending) < self._active:
+            return
+        slots, self._pending = self._pending, []
+        groups = {}   # requests with the same tolerances share a batch
+        for s in slots:
+            st = s["request"][2]
+            groups.setdefault((st.rtol, st.atol, st.method, st.max_steps), []).append(s)
+        for group in groups.values():
+            try:
+                outs = _integrate_requests([s["request"] for s in group])
+            except Exception as exc:   # a bad request: every job waiting on this batch gets the error
+                outs = [exc] * len(group)
+            for s, o in zip(group, outs):
+                s["out"] = o
+        self._cv.notify_all()
+
+
+_LOCKSTEP = threading.local()   # .current: the Lockstep the thread's job runs under, if any
 
 
 def _residual_vector(ms, replays, sigma_mu, settings: Route2Settings):

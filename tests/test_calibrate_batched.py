@@ -102,3 +102,19 @@ def test_a_fit_batches_its_jacobian_and_matches_the_loop(replays, monkeypatch):
     assert len(calls) <= n / 4    # 7 parameters: the 7 Jacobian points of a step in one call
     for k, v in f_loop.values.items():
         assert f_batch.values[k] == pytest.approx(v, rel=1e-5, abs=1e-8), k
+
+
+def test_jobs_in_lockstep_get_what_they_get_alone_in_fewer_batches(replays, monkeypatch):
+    reps, _ = replays
+    s = route2.Route2Settings()
+    sets = [with_model1(a1=a1) for a1 in (-0.8, -0.85, -0.9)] + [with_model1(X_c=0.05)]
+    alone = [route2.curves([(p, "model1", "eq2")], reps[: 1 + k % 3], s)[0] for k, p in enumerate(sets)]
+    calls = count_calls(monkeypatch, route2, "simulate_batch")
+    jobs = [lambda k=k, p=p: route2.curves([(p, "model1", "eq2")], reps[: 1 + k % 3], s)[0]
+            for k, p in enumerate(sets)]
+    together = route2.Lockstep().run(jobs)
+    assert len(calls) == 1
+    assert isinstance(together[3], route2.PoleError) and isinstance(alone[3], route2.PoleError)
+    for a, b in zip(alone[:3], together[:3]):
+        for x, y in zip(a, b):
+            np.testing.assert_array_equal(x, y)
