@@ -35,6 +35,9 @@ def parser() -> argparse.ArgumentParser:
     g.add_argument("--route2-evals", type=int, default=rd.max_evals, help="model evaluations per route-2 fit")
     g.add_argument("--route2-rtol", type=float, default=rd.rtol)
     g.add_argument("--route2-method", default=rd.method)
+    g.add_argument("--integrator", choices=route2.INTEGRATORS, default=rd.integrator,
+                   help="route 2 and bootstrap: 'batched' integrates all runs and Jacobian points of a step in one "
+                        "model.batched.simulate_batch call; 'loop' calls model.simulate per run")
     g.add_argument("--mu-weight", type=float, default=rd.mu_weight)
     g.add_argument("--bootstrap", type=int, default=Settings.n_boot, help="bootstrap replicates over seeds")
     g.add_argument("--bootstrap-evals", type=int, default=Settings.boot_evals, help="model evaluations per replicate fit")
@@ -57,6 +60,7 @@ def main(argv=None) -> int:
             backsolve=backsolve.BacksolveSettings(rate_min=a.rate_min, skip=a.skip, bin_width=a.bin_width,
                                                   min_samples=a.min_bin_samples, cond_max=a.cond_max),
             route2=route2.Route2Settings(max_evals=a.route2_evals, rtol=a.route2_rtol, method=a.route2_method,
+                                         integrator=a.integrator,
                                          mu_weight=a.mu_weight, steady_weight=a.steady_weight),
             steady_weight=a.steady_weight, n_boot=a.bootstrap, boot_evals=a.bootstrap_evals, seed=a.seed,
             min_samples=a.min_samples, figures=not a.no_figures)

@@ -79,6 +79,7 @@ def run(cases, samples, steady_fn, replays, full, base_doc, settings, n_boot=20,
     rng = np.random.default_rng(seed)
     rows, held_rows = [], []
     s2 = replace(settings["route2"], max_evals=boot_evals)
+    prepared = []
     for k in range(n_boot):
         drawn, held = draw(cases, rng)
         smp = resample(samples, drawn)
@@ -89,10 +90,19 @@ def run(cases, samples, steady_fn, replays, full, base_doc, settings, n_boot=20,
         except ValueError as exc:
             log(f"bootstrap replicate {k}: route 1 failed ({exc}); replicate skipped")
             continue
+        prepared.append((k, smp, r1, drawn, held, steady))
+
+    def replicate(k, smp, r1, drawn, held, steady):
         doc1, doc2, fitted = _refit(k, smp, r1, drawn, replays, full, base_doc, steady, settings, s2, edges)
+        return fitted, _heldout_scores(k, doc1, doc2, [r for r in replays if r.case in held], r1["sigma_mu"],
+                                       settings["route2"])
+
+    jobs = [lambda p=p: replicate(*p) for p in prepared]
+    # batched: the replicates' route-2 fits and scores advance together, their integrations in one batch per round
+    done = route2.Lockstep().run(jobs) if settings["route2"].integrator == "batched" else [j() for j in jobs]
+    for (k, _, _, drawn, held, _), (fitted, scores) in zip(prepared, done):
         rows += fitted
-        held_rows += _heldout_scores(k, doc1, doc2, [r for r in replays if r.case in held], r1["sigma_mu"],
-                                     settings["route2"])
+        held_rows += scores
         log(f"bootstrap replicate {k + 1}/{n_boot}: drawn {len(drawn)} seeds, held out {len(held)}")
     values = pd.DataFrame(rows, columns=["replicate", "route", "block", "parameter", "value"])
     heldout = pd.DataFrame(held_rows)
@@ -127,11 +137,13 @@ def _heldout_scores(k, doc1, doc2, held_reps, sigma_mu, settings_route2) -> list
     out = []
     if not held_reps:
         return out
-    for route, doc in (("backsolve", doc1), ("curves", doc2)):
-        prm = params_from_dict(doc, source=f"bootstrap {k} {route}")
-        for model in ("model1", "model2"):
-            sc = route2.score(prm, held_reps, model, settings_route2, sigma_mu)
-            out.append({"replicate": k, "route": route, "model": model, "n_heldout_runs": len(held_reps), **sc})
+    keys = [(route, doc, model) for route, doc in (("backsolve", doc1), ("curves", doc2))
+            for model in ("model1", "model2")]
+    prms = {route: params_from_dict(doc, source=f"bootstrap {k} {route}") for route, doc, _ in keys}
+    scores = route2.score_many([(prms[route], model) for route, _, model in keys], held_reps, settings_route2,
+                               sigma_mu)   # the four (route, model) pairs in one batch
+    for (route, _, model), sc in zip(keys, scores):
+        out.append({"replicate": k, "route": route, "model": model, "n_heldout_runs": len(held_reps), **sc})
     return out
 
 

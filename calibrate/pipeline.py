@@ -50,14 +50,17 @@ def _route2_start(replays, doc, model, r1_values, steady, sigma_mu, s2, xc_margi
         cands += [lin, default_params().model1.__dict__]
     else:
         cands += [default_params().model2.__dict__]
+    valid = []
     for c in cands:
         d = dict(doc)
         d[model] = dict(c)
         try:
-            prm = params_from_dict(d)
+            valid.append((c, params_from_dict(d)))
         except ValueError:
             continue
-        if math.isfinite(route2.score(prm, replays, model, s2, sigma_mu)["score"]):
+    scores = route2.score_many([(prm, model) for _, prm in valid], replays, s2, sigma_mu)   # one batch
+    for (c, _), sc in zip(valid, scores):
+        if math.isfinite(sc["score"]):
             return dict(c)
     return dict(r1_values)
 
@@ -196,10 +199,13 @@ def score_routes(replays, heldout, r1, r2, doc1, doc2, settings: Settings):
     sigma_mu = r1["sigma_mu"]
     quality, default_route = [], {"friction_eq2": "mu_vs_X", "friction_quadratic": "mu_vs_X"}
     n_used = int(r1["bins"].loc[r1["bins"]["used"], "n_samples"].sum())  # samples in the bins route 1 fits
+    pairs = [(model, route, doc) for model in ("model1", "model2") for route, doc in (("backsolve", doc1), ("curves", doc2))]
+    ins_all = dict(zip([(m, r) for m, r, _ in pairs], route2.score_many(
+        [(params_from_dict(doc), model) for model, _, doc in pairs], replays, settings.route2, sigma_mu)))
     for model in ("model1", "model2"):
         ins_scores = {}
         for route, doc in (("backsolve", doc1), ("curves", doc2)):
-            ins = route2.score(params_from_dict(doc), replays, model, settings.route2, sigma_mu)
+            ins = ins_all[(model, route)]
             ins_scores[route] = ins["score"]
             h = heldout[(heldout["route"] == route) & (heldout["model"] == model)] if len(heldout) else heldout
             fr = (r1[model] if route == "backsolve" else r2[model])

@@ -26,10 +26,30 @@ Model 1, the quadratic law for Model 2). ``scipy.optimize.least_squares`` (trf,
 2-point Jacobian with relative step ``diff_step``) runs under a budget of
 ``max_evals`` model evaluations (each = one integration per run); the best
 point seen is returned if the budget runs out.
+
+Integrator
+----------
+``Route2Settings.integrator`` chooses how the runs are integrated:
+
+- ``"batched"`` (default): every integration of one residual evaluation (all
+  runs), and of one finite-difference Jacobian (the n + 1 parameter sets of the
+  2-point scheme times all runs), is one ``model.batched.simulate_batch`` call:
+  Dormand-Prince 5(4) in path strain with per-trajectory error control at
+  ``rtol``/``atol``, falling back to ``simulate`` (``method``, ``rtol``,
+  ``atol``, ``max_steps``) for a trajectory it cannot finish (model/README.md,
+  "Batched integration"). The Jacobian's parameter sets reach it through
+  ``least_squares``' ``workers`` (its map over the finite-difference points),
+  so the steps, the bounds handling and the evaluation order are scipy's own.
+- ``"loop"``: ``model.simulate`` one run at a time (the path before the batch).
+
+A failure is per trajectory in both: a parameter set one of whose runs meets
+the pole, diverges or fails scores as failed; the other sets of the same batch
+are unaffected.
 """
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+import threading
+from dataclasses import asdict, dataclass, field
 
 import numpy as np
 import pandas as pd
@@ -37,11 +57,15 @@ from scipy.optimize import least_squares
 
 from dem_contract import angle_difference, fabric_angle_deg, fabric_norm, pre_reversal_state
 from model import PoleError, params_from_dict, simulate, steady_shear
+from model.batched import simulate_batch
 
 from . import fits
 from .fits import FitResult
 
 PENALTY = 1e3
+INTEGRATORS = ("batched", "loop")
+#: What a failed integration or residual raises (a pole, a diverging fabric, no steady state, a step budget).
+FAILURES = (PoleError, ValueError, FloatingPointError, RuntimeError)
 
 
 @dataclass(frozen=True)
@@ -55,6 +79,11 @@ class Route2Settings:
     mu_weight: float = 1.0
     steady_weight: float = 1.0
     xc_margin: float = 2e-3
+    integrator: str = "batched"  # or "loop": model.simulate one run at a time (module Notes)
+
+    def __post_init__(self):
+        if self.integrator not in INTEGRATORS:
+            raise ValueError(f"route 2: integrator = {self.integrator!r} is not one of {INTEGRATORS}")
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -75,6 +104,7 @@ class Replay:
     mu: np.ndarray
     sd_a: float
     sd_b: float
+    _cached: dict = field(default_factory=dict, repr=False, compare=False)   # key and report grid, made once
 
 
 def _noise(y):
@@ -124,41 +154,230 @@ def history_of(replay: Replay):
     return h
 
 
-def replay_run(params, replay: Replay, model: str, friction: str, settings: Route2Settings, cache=None):
-    """Model a, b and signed friction at the replay's samples. Raises PoleError / ValueError.
+def _replay_key(replay: Replay):
+    """Runs with the same start, history and samples share one integration."""
+    if "key" not in replay._cached:
+        replay._cached["key"] = _key_of(replay)
+    return replay._cached["key"]
 
-    ``cache`` (a dict) shares one integration between runs with the same
-    start, history and samples.
-    """
-    key = (replay.A0, tuple(np.round([x for pc in replay.pieces for x in pc], 9)), replay.s.tobytes())
-    if cache is not None and key in cache:
-        m = cache[key]
-    else:
-        a0, b0 = replay.A0
+
+def _key_of(replay: Replay):
+    return (replay.A0, tuple(np.round([x for pc in replay.pieces for x in pc], 9)), replay.s.tobytes())
+
+
+def _report_grid(replay: Replay):
+    """The history, the sorted report times (samples clipped to the history) and the sort order."""
+    if "grid" not in replay._cached:
         h = history_of(replay)
         t = np.clip(replay.s, 0.0, h.t_end)
         order = np.argsort(t, kind="stable")
-        sim = simulate(params, h, model=model, A0=(a0, b0), method=settings.method, rtol=settings.rtol,
-                       atol=settings.atol, friction=friction, t_eval=t[order], max_steps=settings.max_steps)
-        m = np.empty((len(t), 3))
-        m[order, 0] = sim["A_xx"].to_numpy()
-        m[order, 1] = sim["A_xy"].to_numpy()
-        m[order, 2] = sim["sigma_xy_over_p"].to_numpy()
-        if cache is not None:
-            cache[key] = m
+        replay._cached["grid"] = (h, t[order], order)
+    return replay._cached["grid"]
+
+
+def _signed(m, replay: Replay):
     out = m.copy()
     out[:, 2] *= replay.g
     return out
 
 
-def residuals(params, replays, model, friction, sigma_mu, settings: Route2Settings):
-    """Normalised residuals of every replay (see module Notes); raises on pole / no steady state."""
-    parts, cache = [], {}
-    for r in replays:
-        m = replay_run(params, r, model, friction, settings, cache)
+def replay_run(params, replay: Replay, model: str, friction: str, settings: Route2Settings, cache=None):
+    """Model a, b and signed friction at the replay's samples, by ``model.simulate``. Raises PoleError / ValueError.
+
+    ``cache`` (a dict) shares one integration between runs with the same
+    start, history and samples.
+    """
+    key = _replay_key(replay)
+    if cache is not None and key in cache:
+        m = cache[key]
+    else:
+        a0, b0 = replay.A0
+        h, t, order = _report_grid(replay)
+        sim = simulate(params, h, model=model, A0=(a0, b0), method=settings.method, rtol=settings.rtol,
+                       atol=settings.atol, friction=friction, t_eval=t, max_steps=settings.max_steps)
+        m = np.empty((len(t), 3))
+        m[order] = sim[["A_xx", "A_xy", "sigma_xy_over_p"]].to_numpy()
+        if cache is not None:
+            cache[key] = m
+    return _signed(m, replay)
+
+
+def curves(items, replays, settings: Route2Settings) -> list:
+    """Model curves of every replay for many parameter sets, by ``settings.integrator``.
+
+    Parameters
+    ----------
+    items : list of (params, model, friction)
+        One parameter set each (``ModelParams``), with its model and friction law.
+    replays : list of Replay
+        The runs every set is integrated on.
+    settings : Route2Settings
+
+    Returns
+    -------
+    list
+        Per item, either a list (per replay) of arrays ``(n_samples, 3)``: a, b
+        and the signed friction at the samples (``replay_run``'s), or the
+        exception that failed the item: the first of its runs, in replay order,
+        that met the pole, diverged or failed. Items fail alone.
+    """
+    if settings.integrator == "loop":
+        out = []
+        for prm, model, friction in items:
+            cache = {}
+            try:
+                out.append([replay_run(prm, r, model, friction, settings, cache) for r in replays])
+            except FAILURES as exc:
+                out.append(exc)
+        return out
+    return _curves_batched(items, replays, settings)
+
+
+def _curves_batched(items, replays, settings: Route2Settings) -> list:
+    """``curves`` by one ``simulate_batch`` call over every (item, distinct run); in lockstep when one runs."""
+    if not items:
+        return []
+    if getattr(_LOCKSTEP, "current", None) is not None:
+        return _LOCKSTEP.current.submit((items, replays, settings))
+    return _integrate_requests([(items, replays, settings)])[0]
+
+
+def _integrate_requests(requests) -> list:
+    """``curves`` of several requests (items, replays, settings; same tolerances) in one ``simulate_batch`` call.
+
+    A trajectory's numbers do not depend on the rest of its batch
+    (model/README.md), so each request gets what it would get alone.
+    """
+    settings = requests[0][2]
+    P, H, M, F, A0, T, plan, n = [], [], [], [], [], [], [], 0
+    for items, replays, _ in requests:
+        unique = {}
+        for r in replays:
+            unique.setdefault(_replay_key(r), r)
+        keys, runs = list(unique), list(unique.values())
+        grids = [_report_grid(r) for r in runs]
+        for prm, model, friction in items:
+            P += [prm] * len(runs)
+            M += [model] * len(runs)
+            F += [friction] * len(runs)
+            H += [g[0] for g in grids]
+            T += [g[1] for g in grids]
+            A0 += [tuple(r.A0) for r in runs]
+        plan.append((n, keys, grids, len(items), replays))
+        n += len(items) * len(runs)
+    res = simulate_batch(P, H, model=M, friction=F, A0=A0, t_eval=T, rtol=settings.rtol, atol=settings.atol,
+                         fallback_method=settings.method, fallback_rtol=settings.rtol, fallback_atol=settings.atol,
+                         fallback_max_steps=settings.max_steps)
+    traj = res.table["trajectory"].to_numpy()
+    vals = res.table[["A_xx", "A_xy", "sigma_xy_over_p"]].to_numpy()
+    lo = np.searchsorted(traj, np.arange(n), side="left")
+    hi = np.searchsorted(traj, np.arange(n), side="right")
+    outs = []
+    for first, keys, grids, n_items, replays in plan:
+        out, n_runs = [], len(keys)
+        for j in range(n_items):
+            idx = range(first + j * n_runs, first + (j + 1) * n_runs)
+            err = next((res.errors[i] for i in idx if res.errors[i] is not None), None)
+            if err is not None:
+                out.append(err)
+                continue
+            by_key = {}
+            for k, i in enumerate(idx):
+                m = np.empty((hi[i] - lo[i], 3))
+                m[grids[k][2]] = vals[lo[i]:hi[i]]
+                by_key[keys[k]] = m
+            out.append([_signed(by_key[_replay_key(r)], r) for r in replays])
+        outs.append(out)
+    return outs
+
+
+class Lockstep:
+    """Run jobs in threads whose batched ``curves`` requests are integrated together, one batch per round.
+
+    Each job (e.g. one bootstrap replicate's fits) runs in its own thread; when
+    every job still running is waiting on a ``curves`` request, the last to
+    arrive integrates all requests in one ``simulate_batch`` call and hands
+    each its part. A job's results are those it gets alone (the batch's
+    trajectories are independent), so ``run`` returns what running the jobs one
+    after the other would; only the number of numpy passes changes.
+    """
+
+    def __init__(self):
+        self._cv = threading.Condition()
+        self._pending, self._active = [], 0
+
+    def run(self, jobs) -> list:
+        """Call every job (a callable without arguments) in its own thread; their results, or raise the first error."""
+        results, errors = [None] * len(jobs), [None] * len(jobs)
+        self._active = len(jobs)
+
+        def work(k):
+            _LOCKSTEP.current = self
+            try:
+                results[k] = jobs[k]()
+            except BaseException as exc:   # re-raised below, in the caller's thread
+                errors[k] = exc
+            finally:
+                _LOCKSTEP.current = None
+                with self._cv:
+                    self._active -= 1
+                    self._flush_if_ready()
+
+        threads = [threading.Thread(target=work, args=(k,), daemon=True) for k in range(len(jobs))]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+        for e in errors:
+            if e is not None:
+                raise e
+        return results
+
+    def submit(self, request):
+        slot = {"request": request}
+        with self._cv:
+            self._pending.append(slot)
+            self._flush_if_ready()
+            self._cv.wait_for(lambda: "out" in slot)
+        if isinstance(slot["out"], BaseException):
+            raise slot["out"]
+        return slot["out"]
+
+    def _flush_if_ready(self):
+        if not self._pending or len(self._pending) < self._active:
+            return
+        slots, self._pending = self._pending, []
+        groups = {}   # requests with the same tolerances share a batch
+        for s in slots:
+            st = s["request"][2]
+            groups.setdefault((st.rtol, st.atol, st.method, st.max_steps), []).append(s)
+        for group in groups.values():
+            try:
+                outs = _integrate_requests([s["request"] for s in group])
+            except Exception as exc:   # a bad request: every job waiting on this batch gets the error
+                outs = [exc] * len(group)
+            for s, o in zip(group, outs):
+                s["out"] = o
+        self._cv.notify_all()
+
+
+_LOCKSTEP = threading.local()   # .current: the Lockstep the thread's job runs under, if any
+
+
+def _residual_vector(ms, replays, sigma_mu, settings: Route2Settings):
+    parts = []
+    for m, r in zip(ms, replays):
         parts += [(m[:, 0] - r.a) / r.sd_a, (m[:, 1] - r.b) / r.sd_b,
                   settings.mu_weight * (m[:, 2] - r.mu) / sigma_mu]
     return np.concatenate(parts)
+
+
+def residuals(params, replays, model, friction, sigma_mu, settings: Route2Settings):
+    """Normalised residuals of every replay (see module Notes); raises on pole / no steady state."""
+    (c,) = curves([(params, model, friction)], replays, settings)
+    if isinstance(c, Exception):
+        raise c
+    return _residual_vector(c, replays, sigma_mu, settings)
 
 
 class _Budget(Exception):
@@ -182,36 +401,72 @@ def _scaled_bounds(model, steady, settings: Route2Settings, x_lower):
 
 
 def _objective(replays, base_params, model, keys, scale, steady, sigma_mu, settings: Route2Settings, n_res):
-    """The residual function of ``fit`` and the state it keeps (evaluations, failures, best point).
+    """The residual function of ``fit``, its ``workers`` map, and the state they keep.
 
     A trial set that cannot be integrated (pole, divergence, no steady state)
     gets ``PENALTY`` in every residual; past ``max_evals`` evaluations it raises ``_Budget``.
+    ``workers(fun, xs)`` is the map ``least_squares`` evaluates the Jacobian's
+    finite-difference points with: with the batched integrator it integrates all
+    of them in one batch first, then calls ``fun`` on each point in scipy's order,
+    so the counting, the budget and the best point are those of one call per point.
+
+    Returns
+    -------
+    res, workers : callable
+    state : dict
+        ``n`` (evaluations), ``fails``, ``best`` (scaled point) and ``best_cost``.
     """
     friction = "eq2" if model == "model1" else "quadratic"
     alpha = fits.alpha_model1 if model == "model1" else fits.alpha_model2
     state = {"n": 0, "best": None, "best_cost": np.inf, "fails": 0}
+    ready = {}   # point (bytes) -> residuals computed by the last batch (None: failed)
+
+    def evaluate(points):
+        """Residuals of each scaled point, or None where it cannot be integrated (one batch for all)."""
+        out, trials = [None] * len(points), []
+        for k, p in enumerate(points):
+            vals = dict(zip(keys, (np.asarray(p) * scale).tolist()))
+            try:
+                trials.append((k, vals, _with_block(base_params, model, vals)))
+            except FAILURES:
+                pass
+        got = curves([(prm, model, friction) for _, _, prm in trials], replays, settings)
+        for (k, vals, _), c in zip(trials, got):
+            try:
+                if isinstance(c, Exception):
+                    raise c
+                r = _residual_vector(c, replays, sigma_mu, settings)
+                s1, s2 = alpha(steady["X"], *[vals[key] for key in keys])
+                r = np.concatenate([r, fits._steady_fabric_residuals(s1, s2, steady, settings.steady_weight)])
+                if not np.all(np.isfinite(r)):
+                    raise ValueError("non-finite residuals")
+                out[k] = r
+            except FAILURES:
+                pass
+        return out
 
     def res(p):
         if state["n"] >= settings.max_evals:
             raise _Budget
         state["n"] += 1
-        vals = dict(zip(keys, (p * scale).tolist()))
-        try:
-            prm = _with_block(base_params, model, vals)
-            r = residuals(prm, replays, model, friction, sigma_mu, settings)
-            s1, s2 = alpha(steady["X"], *[vals[k] for k in keys])
-            r = np.concatenate([r, fits._steady_fabric_residuals(s1, s2, steady, settings.steady_weight)])
-            if not np.all(np.isfinite(r)):
-                raise ValueError("non-finite residuals")
-        except (PoleError, ValueError, FloatingPointError, RuntimeError):
+        key = np.asarray(p, dtype=float).tobytes()
+        r = ready.pop(key) if key in ready else evaluate([p])[0]
+        if r is None:
             state["fails"] += 1
             r = np.full(n_res, PENALTY)
         cost = 0.5 * float(np.sum(r**2))
         if cost < state["best_cost"]:
-            state["best_cost"], state["best"] = cost, p.copy()
+            state["best_cost"], state["best"] = cost, np.array(p, dtype=float)
         return r
 
-    return res, state
+    def workers(fun, points):
+        points = [np.array(x, dtype=float) for x in points]
+        ready.clear()
+        if settings.integrator == "batched":
+            ready.update(zip((x.tobytes() for x in points), evaluate(points)))
+        return [fun(x) for x in points]
+
+    return res, workers, state
 
 
 def fit(replays, base_params: dict, model: str, start: dict, steady: dict, sigma_mu: float,
@@ -234,7 +489,7 @@ def fit(replays, base_params: dict, model: str, start: dict, steady: dict, sigma
     """
     keys, scale, lo, hi = _scaled_bounds(model, steady, settings, x_lower)
     n_res = sum(3 * len(r.s) for r in replays) + fits.N_STEADY
-    res, state = _objective(replays, base_params, model, keys, scale, steady, sigma_mu, settings, n_res)
+    res, workers, state = _objective(replays, base_params, model, keys, scale, steady, sigma_mu, settings, n_res)
     x0 = np.array([start[k] for k in keys]) / scale
     with np.errstate(invalid="ignore"):
         x0 = np.clip(x0, np.where(np.isfinite(lo), lo + 1e-9 * np.abs(lo) + 1e-12, lo),
@@ -242,7 +497,7 @@ def fit(replays, base_params: dict, model: str, start: dict, steady: dict, sigma
     message = ""
     try:
         sol = least_squares(res, x0, bounds=(lo, hi), x_scale="jac", diff_step=settings.diff_step,
-                            max_nfev=settings.max_evals)
+                            max_nfev=settings.max_evals, workers=workers)
         message = sol.message
     except _Budget:
         message = f"budget of {settings.max_evals} model evaluations used up; best point kept"
@@ -263,18 +518,29 @@ def score(params, replays, model: str, settings: Route2Settings, sigma_mu: float
     diverging fabric, no steady state), the reason, with ``inf`` in every
     number (the worst score, for comparisons; tables write NaN and the reason).
     """
-    friction = "eq2" if model == "model1" else "quadratic"
+    return score_many([(params, model)], replays, settings, sigma_mu)[0]
+
+
+def score_many(items, replays, settings: Route2Settings, sigma_mu: float) -> list:
+    """``score`` of each (params, model) of ``items`` on ``replays``, integrated together (``curves``)."""
+    friction = {"model1": "eq2", "model2": "quadratic"}
+    got = curves([(prm, model, friction[model]) for prm, model in items], replays, settings)
+    return [_score_of(c, replays, settings, sigma_mu) for c in got]
+
+
+def _score_of(c, replays, settings: Route2Settings, sigma_mu: float) -> dict:
     try:
-        z = residuals(params, replays, model, friction, sigma_mu, settings)
-        dA, dth, dmu, cache = [], [], [], {}
-        for r in replays:
-            m = replay_run(params, r, model, friction, settings, cache)
+        if isinstance(c, Exception):
+            raise c
+        z = _residual_vector(c, replays, sigma_mu, settings)
+        dA, dth, dmu = [], [], []
+        for m, r in zip(c, replays):
             dth.append(angle_difference(fabric_angle_deg(m[:, 0], m[:, 1]), fabric_angle_deg(r.a, r.b)))
             dA.append(fabric_norm(m[:, 0], m[:, 1]) - fabric_norm(r.a, r.b))
             dmu.append(m[:, 2] - r.mu)
         rms = lambda v: float(np.sqrt(np.mean(np.concatenate(v) ** 2)))  # noqa: E731
         return {"score": float(np.sqrt(np.mean(z**2))), "rms_A_norm": rms(dA), "rms_theta_A": rms(dth),
                 "rms_mu": rms(dmu), "failure": ""}
-    except (PoleError, ValueError, FloatingPointError, RuntimeError) as exc:
+    except FAILURES as exc:
         reason = f"{type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''}"
         return {"score": np.inf, "rms_A_norm": np.inf, "rms_theta_A": np.inf, "rms_mu": np.inf, "failure": reason}
