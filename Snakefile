@@ -18,7 +18,11 @@ if not workflow.overwrite_configfiles:
     configfile: "config/config.yaml"
 
 
-validate(config, "workflow/schemas/config.schema.yaml")
+# Pre-flight: every bad input is named (key, value, allowed) before any job, exit code 2.
+from campaign import preflight
+
+preflight.stop_on_problems(preflight.check(config, workflow.configfiles))
+validate(config, "workflow/schemas/config.schema.yaml")  # fills the schema's defaults
 
 
 include: "workflow/rules/common.smk"

@@ -1,0 +1,399 @@
+"""The pre-flight check: every bad config is named before any job runs.
+
+The Snakefile calls ``check`` right after loading the config and stops with exit
+code 2 and one line per problem when it finds any::
+
+    config error: <key> = <value>: <what is wrong> (allowed: <what would do>)
+
+It holds what the schema (``workflow/schemas/config.schema.yaml``) cannot say:
+non-finite numbers, keys that must agree with each other (sampling intervals,
+bulk band and gap, a protocol's strains), case labels that two values would
+share, calibration sets and the sensitivity set naming what the campaign does
+not have, the results folder, and duplicated keys in the config file's text
+(which a YAML loader otherwise lets the last one win). Last, every scene the
+campaign would write is checked by yade_scripts' own validator, so nothing the
+DEM would refuse reaches its first job.
+
+``python -m campaign check CONFIGFILE...`` runs the same check outside Snakemake
+(it also names a missing or malformed file with its line).
+"""
+from __future__ import annotations
+
+import importlib.util
+import math
+import re
+from pathlib import Path
+
+import yaml
+
+from dem_contract.labels import case_label, format_number
+
+from .calibration_sets import calibration_sets, same_value
+from .cases import cases, rates
+from .scenes import scene_from_config
+
+ROOT = Path(__file__).resolve().parents[1]
+SCHEMA = ROOT / "workflow" / "schemas" / "config.schema.yaml"
+
+#: Largest inertial number taken as quasi-static (the model's regime, docs/model.md):
+#: above it a campaign needs ``loading.allow_inertial: true``.
+QUASI_STATIC_MAX_I = 1.0e-2
+#: Range of I the DEM accepts (yade_scripts/scene.py, loading.inertial_number).
+I_RANGE = (1.0e-5, 0.1)
+#: Calibration set names are path parts and Snakemake wildcards (workflow/rules/common.smk).
+SET_NAME = re.compile(r"^[A-Za-z0-9.-]+(_[A-Za-z0-9.-]+)*$")
+#: Top-level folders of the repository that hold code or inputs: never a results folder.
+SOURCE_FOLDERS = {"campaign", "calibrate", "compare", "config", "dem_contract", "dem_study", "docs", "model",
+                  "profiles", "tests", "workflow", "yade_scripts", ".git", ".snakemake"}
+# pack defaults of the scene (yade_scripts/scene.py)
+PACK_DEFAULTS = {"initial_solid_fraction": 0.4, "solid_fraction_guess": 0.8}
+BULK_EXCLUSION_DEFAULT = 3.0
+
+
+class ConfigProblem(ValueError):
+    """Bad config: its message is one line per problem."""
+
+
+def _v(x) -> str:
+    return format_number(x) if isinstance(x, float) else repr(x) if isinstance(x, str) else str(x)
+
+
+def problem(key: str, value, why: str, allowed: str | None = None, shown: str | None = None) -> str:
+    """One line: ``config error: key = value: why (allowed: ...)``; ``shown`` replaces the value's text."""
+    text = f"config error: {key} = {_v(value) if shown is None else shown}: {why}"
+    return text + (f" (allowed: {allowed})" if allowed else "")
+
+
+# --- the config file's text ----------------------------------------------------
+
+class _UniqueKeyLoader(yaml.SafeLoader):
+    """PyYAML's safe loader that refuses a key given twice in one mapping."""
+
+
+def _construct_mapping(loader, node, deep=False):
+    first = {}
+    for key_node, _ in node.value:
+        key = loader.construct_object(key_node, deep=deep)
+        if key in first:
+            raise yaml.constructor.ConstructorError(
+                None, None, f"duplicate key '{key}' (first given on line {first[key] + 1}; "
+                f"YAML would keep only the last one)", key_node.start_mark)
+        first[key] = key_node.start_mark.line
+    return loader.construct_mapping(node, deep=deep)
+
+
+_UniqueKeyLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _construct_mapping)
+
+
+def load_configfile(path) -> dict:
+    """The config file as a dict; ConfigProblem naming the file and line when it cannot be read.
+
+    A missing file, a folder, malformed YAML, a duplicated key or a top level
+    that is not a mapping are all refused.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise ConfigProblem(f"config error: {path}: no such file") from None
+    except IsADirectoryError:
+        raise ConfigProblem(f"config error: {path}: is a folder, not a config file") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ConfigProblem(f"config error: {path}: cannot be read ({exc})") from None
+    try:
+        doc = yaml.load(text, Loader=_UniqueKeyLoader)
+    except yaml.MarkedYAMLError as exc:
+        mark = exc.problem_mark
+        where = f"{path}:{mark.line + 1}" if mark is not None else str(path)
+        raise ConfigProblem(f"config error: {where}: {exc.problem}"
+                            + (f" ({exc.context})" if exc.context else "")) from None
+    except yaml.YAMLError as exc:
+        raise ConfigProblem(f"config error: {path}: not valid YAML ({exc})") from None
+    if not isinstance(doc, dict):
+        raise ConfigProblem(f"config error: {path}: the config must be a mapping of keys (campaign:, loading:, ...)")
+    return doc
+
+
+def configfile_problems(paths) -> list[str]:
+    """Problems of the config files' text (``load_configfile``), one per file."""
+    out = []
+    for path in paths:
+        try:
+            load_configfile(path)
+        except ConfigProblem as exc:
+            out.append(str(exc))
+    return out
+
+
+# --- values the schema cannot see ------------------------------------------------
+
+def _walk(node, key=""):
+    if isinstance(node, dict):
+        for k, v in node.items():
+            yield from _walk(v, f"{key}.{k}" if key else str(k))
+    elif isinstance(node, list):
+        for i, v in enumerate(node):
+            yield from _walk(v, f"{key}[{i}]")
+    else:
+        yield key, node
+
+
+def finite_problems(config: dict) -> list[str]:
+    """NaN or infinity anywhere: the schema's ranges let NaN through (every comparison with it is false)."""
+    return [problem(key, value, "must be a finite number")
+            for key, value in _walk(config) if isinstance(value, float) and not math.isfinite(value)]
+
+
+def schema_problems(config: dict, schema_path=SCHEMA) -> list[str]:
+    """The schema's findings, one line each, naming the key (Snakemake's validate then fills defaults)."""
+    import jsonschema
+
+    schema = yaml.safe_load(Path(schema_path).read_text())
+    validator = jsonschema.validators.validator_for(schema)(schema)
+    out = []
+    for error in sorted(validator.iter_errors(config), key=lambda e: list(map(str, e.absolute_path))):
+        key = "".join(f"[{p}]" if isinstance(p, int) else f".{p}" for p in error.absolute_path).lstrip(".")
+        hint = ""
+        if isinstance(error.instance, str) and error.validator == "type":
+            try:
+                float(error.instance)
+                hint = " (YAML reads a number like 1.0e5 as text: write 1.0e+5)"
+            except ValueError:
+                pass
+        out.append(f"config error: {key or '<top level>'}: {error.message}{hint}")
+    return out
+
+
+def _seed_problems(seeds, key) -> list[str]:
+    return [problem(f"{key}[{i}]", s, "must be an integer (write 1, not 1.0)", "0, 1, 2, ...", shown=repr(s))
+            for i, s in enumerate(seeds or []) if isinstance(s, float)]
+
+
+def loading_problems(config: dict) -> list[str]:
+    """Rates within the DEM's range and the quasi-static bound; distinct case labels; integer seeds."""
+    loading, out = config["loading"], []
+    allow = bool(loading.get("allow_inertial", False))
+    out += _seed_problems(config["seeds"], "seeds")
+    out += _seed_problems((config.get("accuracy") or {}).get("seeds"), "accuracy.seeds")
+    for p in loading["pressures"]:
+        for j, I in enumerate(rates(config, p)):
+            if "wall_velocities" in loading:
+                key, value = f"loading.wall_velocities[{j}]", loading["wall_velocities"][j]
+                why = f"gives I = {I:.3g} at p = {format_number(p)} Pa (I = 2U/H d/sqrt(p/rho), H = H_over_d d)"
+            else:
+                key, value, why = f"loading.inertial_numbers[{j}]", I, "I"
+            if not I_RANGE[0] <= I <= I_RANGE[1]:
+                out.append(problem(key, value, f"{why} outside the DEM's range",
+                                   f"I in [{I_RANGE[0]:g}, {I_RANGE[1]:g}]"))
+            elif I > QUASI_STATIC_MAX_I and not allow:
+                out.append(problem(key, value, f"{why} is above the quasi-static bound I <= {QUASI_STATIC_MAX_I:g} "
+                                   "the model is made for",
+                                   f"I <= {QUASI_STATIC_MAX_I:g}, or set loading.allow_inertial: true"))
+    if out:
+        return out
+    # two values that print alike would make one case (and one folder) of two
+    by_label = {}
+    for p in loading["pressures"]:
+        for I in rates(config, p):
+            by_label.setdefault(case_label(p, I, config["seeds"][0]), []).append((p, I))
+    for label, pairs in by_label.items():
+        if len(pairs) > 1:
+            (p0, I0), (p1, I1) = pairs[:2]
+            key = "loading.pressures" if p0 != p1 else (
+                "loading.wall_velocities" if "wall_velocities" in loading else "loading.inertial_numbers")
+            values = f"{p0!r} and {p1!r}" if p0 != p1 else f"{I0!r} and {I1!r}"
+            out.append(problem(key, None, f"both give the case label {label} (labels keep 6 significant digits), "
+                               "so the two would be one case", "values that differ within 6 significant digits", shown=values))
+    return out
+
+
+def cell_problems(config: dict) -> list[str]:
+    """Sampling intervals in order, a bulk band inside the gap, a width for 3 disks, a packing that can compress."""
+    out = []
+    s, cell, mat, pack = config["sampling"], config["cell"], config["material"], config.get("pack") or {}
+    if s["fine_interval"] > s["coarse_interval"]:
+        out.append(problem("sampling.fine_interval", s["fine_interval"],
+                           f"is above sampling.coarse_interval = {_v(s['coarse_interval'])}",
+                           "fine_interval <= coarse_interval"))
+    out += _bulk_problems(cell["H_over_d"], s.get("bulk_exclusion_d", BULK_EXCLUSION_DEFAULT), "the gap cell.H_over_d")
+    W = cell["W_over_H"] * cell["H_over_d"]
+    if W < 3 * mat["size_ratio_max"]:
+        out.append(problem("cell.W_over_H", cell["W_over_H"],
+                           f"the periodic width {W:g} d cannot hold 3 of the largest disks "
+                           f"({_v(mat['size_ratio_max'])} d)", f"W_over_H >= {3 * mat['size_ratio_max'] / cell['H_over_d']:.3g}"))
+    phi0 = pack.get("initial_solid_fraction", PACK_DEFAULTS["initial_solid_fraction"])
+    phi = pack.get("solid_fraction_guess", PACK_DEFAULTS["solid_fraction_guess"])
+    if phi0 >= phi:
+        out.append(problem("pack.initial_solid_fraction", phi0,
+                           f"must be below pack.solid_fraction_guess = {_v(phi)} (the loose placement is compressed to it)",
+                           f"< {_v(phi)}"))
+    return out
+
+
+def _bulk_problems(H_over_d, bulk, gap):
+    if H_over_d - 2 * bulk < 1:
+        return [problem("sampling.bulk_exclusion_d", bulk,
+                        f"two bands of {_v(bulk)} d leave no bulk in {gap} = {_v(H_over_d)}",
+                        f"bulk_exclusion_d <= {(H_over_d - 1) / 2:g} (H_over_d - 2 bulk_exclusion_d >= 1)")]
+    return []
+
+
+def protocol_problems(config: dict) -> list[str]:
+    """A protocol longer than its transition, and every stage at least one sampling interval long."""
+    out, s = [], config["sampling"]
+    after_reversal = s["fine_interval"] if s["fine_window"] > 0 else s["coarse_interval"]
+    sin = config["protocols"].get("sinusoidal")
+    if sin and sin["transition_strain"] > sin["strain"]:
+        out.append(problem("protocols.sinusoidal.transition_strain", sin["transition_strain"],
+                           f"is longer than protocols.sinusoidal.strain = {_v(sin['strain'])}: "
+                           "the run would stop inside the half cosine",
+                           f"transition_strain <= {_v(sin['strain'])}"))
+    for name, spec in config["protocols"].items():
+        if spec["strain"] < after_reversal:
+            out.append(problem(f"protocols.{name}.strain", spec["strain"],
+                               f"shorter than one sample ({_v(after_reversal)} of strain after the reversal)",
+                               f"strain >= {_v(after_reversal)}"))
+    if config["preshear"]["strain"] < s["coarse_interval"]:
+        out.append(problem("preshear.strain", config["preshear"]["strain"],
+                           f"shorter than one sample (sampling.coarse_interval = {_v(s['coarse_interval'])})",
+                           f"strain >= {_v(s['coarse_interval'])}"))
+    return out
+
+
+def calibration_problems(config: dict) -> list[str]:
+    """Calibration sets that name what the campaign has; a sensitivity set that exists."""
+    out = []
+    table = cases(config)
+    pressures = sorted({c["pressure"] for c in table.values()})
+    inertial = sorted({c["inertial_number"] for c in table.values()})
+    protocols = list(config["protocols"])
+    sets = (config.get("calibration") or {}).get("sets") or {}
+    for name, spec in sets.items():
+        key = f"calibration.sets.{name}"
+        if not SET_NAME.match(str(name)):
+            out.append(problem(key, name, "is not a usable set name (it names a folder and a Snakemake wildcard)",
+                               "letters, digits, '.', '-', single '_' between them"))
+            continue
+        for field, have in (("pressures", pressures), ("inertial_numbers", inertial)):
+            for i, v in enumerate(spec.get(field) or []):
+                if not any(same_value(v, h) for h in have):
+                    out.append(problem(f"{key}.{field}[{i}]", v, "is not in the campaign, so the set would "
+                                       "silently lose it", ", ".join(format_number(h) for h in have)))
+        for i, p in enumerate(spec.get("protocols") or []):
+            if p not in protocols:
+                out.append(problem(f"{key}.protocols[{i}]", p, "is not a protocol of the campaign (protocols:)",
+                                   ", ".join(protocols)))
+    if out:
+        return out
+    built = calibration_sets(config, table)
+    for name in sets:
+        if name not in built:
+            out.append(problem(f"calibration.sets.{name}", name, "selects no case of the campaign"))
+    sensitivity = (config.get("compare") or {}).get("sensitivity_set", "all")
+    if sensitivity not in built:
+        out.append(problem("compare.sensitivity_set", sensitivity, "is not a calibration set",
+                           ", ".join(sorted(built))))
+    return out
+
+
+def results_dir_problems(config: dict, root=ROOT) -> list[str]:
+    """A results folder that is a folder of its own: not empty, not a root, not the code's."""
+    value = config.get("results_dir", "results")
+    key, allowed = "results_dir", "a folder of its own, e.g. results or /scratch/me/results"
+    if not str(value).strip():
+        return [problem(key, value, "is empty", allowed)]
+    if any(ch.isspace() for ch in str(value)):
+        return [problem(key, value, "contains white space (the rules' shell commands do not quote paths)", allowed)]
+    root = Path(root).resolve()
+    path = (root / value).resolve()
+    if path == Path(path.anchor):
+        return [problem(key, value, "is the root of the file system", allowed)]
+    if path == root or path in root.parents:
+        return [problem(key, value, "is the repository or a folder above it: outputs would mix with the code",
+                        allowed)]
+    if root in path.parents and path.relative_to(root).parts[0] in SOURCE_FOLDERS:
+        return [problem(key, value, f"lies in the repository's {path.relative_to(root).parts[0]}/ folder", allowed)]
+    return []
+
+
+def study_problems(config: dict) -> list[str]:
+    """The DEM study's grid (when it runs): dem_study.grid's own checks, bulk band and width per height."""
+    acc = config.get("accuracy") or {}
+    if not acc.get("dem_study", False):
+        return []
+    from dem_study import grid
+
+    try:
+        points = grid.unique_points(grid.expand(acc))
+    except (ValueError, KeyError) as exc:
+        return [f"config error: {str(exc).strip(chr(39))}"]
+    bulk = config["sampling"].get("bulk_exclusion_d", BULK_EXCLUSION_DEFAULT)
+    out = []
+    for H in sorted(set(points["H_over_d"])):
+        out += _bulk_problems(H, bulk, "the DEM study's gap accuracy H_over_d")
+    return out
+
+
+def _scene_validator(root=ROOT):
+    """yade_scripts/scene.py's validate, loaded from its file (yade_scripts is not a package)."""
+    spec = importlib.util.spec_from_file_location("_yade_scene", Path(root) / "yade_scripts" / "scene.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module.validate, module.SceneError
+
+
+def scene_problems(config: dict, root=ROOT) -> list[str]:
+    """Every scene the campaign (and the DEM study) would write, through the DEM's own validator."""
+    validate, SceneError = _scene_validator(root)
+    scenes = [(label, scene_from_config(config, case, label)) for label, case in cases(config).items()]
+    if (config.get("accuracy") or {}).get("dem_study", False):
+        from dem_study import grid
+
+        scenes += [(point, grid.point_scene(config, point))
+                   for point in grid.unique_points(grid.expand(config["accuracy"]))["point"]]
+    out = []
+    for label, scene in scenes:
+        try:
+            validate(scene)
+        except SceneError as exc:
+            line = f"config error: the scene of {label}: {str(exc).removeprefix('scene error: ')}"
+            if line not in out:
+                out.append(line)
+    return out
+
+
+def check(config: dict, configfiles=(), schema_path=SCHEMA, root=ROOT) -> list[str]:
+    """Every problem of the config, one line each; empty when the campaign may start.
+
+    Parameters
+    ----------
+    config : dict
+        The config as Snakemake holds it (files and ``--config`` merged), before
+        the schema's defaults are filled in.
+    configfiles : list of paths
+        The config files it came from, checked for duplicated keys.
+    """
+    out = configfile_problems(configfiles)
+    if "loading" in config and isinstance(config["loading"], dict):
+        if "inertial_numbers" in config["loading"] and "wall_velocities" in config["loading"]:
+            out.append("config error: loading: give inertial_numbers or wall_velocities, not both")
+    out += finite_problems(config)
+    # (the "not both" line above says what the schema's oneOf says at length)
+    out += [line for line in schema_problems(config, schema_path)
+            if not (out and line.startswith("config error: loading: {") and "is valid under each of" in line)]
+    if out:
+        return out
+    for step in (results_dir_problems, loading_problems, cell_problems, protocol_problems,
+                 calibration_problems, study_problems):
+        out += step(config, root) if step is results_dir_problems else step(config)
+    return out or scene_problems(config, root)
+
+
+def stop_on_problems(problems: list[str]) -> None:
+    """Print the problems on stderr and exit with code 2 (bad input), before Snakemake plans any job."""
+    import sys
+
+    if problems:
+        print("\n".join(problems), file=sys.stderr, flush=True)
+        sys.exit(2)
+
