@@ -87,6 +87,7 @@ use rule dem_pack as dem_study_pack with:
         scene=rules.dem_study_scene.output[0],
     output:
         state=f"{ACC_DEM}/{{point}}/pack.final.yade.gz",
+        series=f"{ACC_DEM}/{{point}}/pack.csv",
         sidecar=f"{ACC_DEM}/{{point}}/pack.json",
     params:
         stage="pack",

@@ -43,6 +43,7 @@ rule dem_pack:
         scene=rules.scene.output[0],
     output:
         state=f"{RESULTS}/dem/{{case}}/pack.final.yade.gz",
+        series=f"{RESULTS}/dem/{{case}}/pack.csv",
         sidecar=f"{RESULTS}/dem/{{case}}/pack.json",
     params:
         stage="pack",
