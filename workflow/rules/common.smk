@@ -4,7 +4,6 @@ import sys
 
 from campaign.cases import cases
 from campaign.scenes import result_key, scene_from_config, scene_of_result_key, write_scene
-from dem_contract.labels import format_number as _fmt
 
 PY = sys.executable  # the venv's python that runs snakemake also runs the stages
 RESULTS = config.get("results_dir", "results")
