@@ -296,6 +296,52 @@ def calibration_problems(config: dict) -> list[str]:
     return out
 
 
+def _argparse_error(parser, argv) -> str | None:
+    """argparse's own complaint about ``argv`` (its last stderr line), or None when it parses."""
+    import contextlib
+    import io
+
+    err = io.StringIO()
+    try:
+        with contextlib.redirect_stderr(err):
+            parser.parse_args(argv)
+    except SystemExit:
+        lines = err.getvalue().strip().splitlines()
+        return lines[-1].split("error: ", 1)[-1] if lines else "not accepted"
+    return None
+
+
+def options_problems(config: dict) -> list[str]:
+    """Extra command-line options of calibrate and compare, parsed by their own parsers now, not after the DEM."""
+    import shlex
+
+    out = []
+    calibration = (config.get("calibration") or {}).get("options", "")
+    compare = (config.get("compare") or {}).get("options", "")
+    checks = []
+    if calibration.strip():
+        from calibrate.__main__ import parser as calibrate_parser
+
+        checks.append(("calibration.options", calibration, calibrate_parser(), ["--dem", "d", "--out", "o"],
+                       "options of python -m calibrate --help"))
+    if compare.strip():
+        from compare.cli import build_parser
+
+        checks.append(("compare.options", compare, build_parser(),
+                       ["predict", "--dem", "d", "--params", "p", "--out", "o"],
+                       "options of python -m compare predict --help"))
+    for key, value, parser, required, allowed in checks:
+        try:
+            argv = shlex.split(value)
+        except ValueError as exc:
+            out.append(problem(key, value, f"cannot be split into options ({exc})", allowed))
+            continue
+        error = _argparse_error(parser, [*required, *argv])
+        if error:
+            out.append(problem(key, value, error, allowed))
+    return out
+
+
 def results_dir_problems(config: dict, root=ROOT) -> list[str]:
     """A results folder that is a folder of its own: not empty, not a root, not the code's."""
     value = config.get("results_dir", "results")
@@ -384,7 +430,7 @@ def check(config: dict, configfiles=(), schema_path=SCHEMA, root=ROOT) -> list[s
     if out:
         return out
     for step in (results_dir_problems, loading_problems, cell_problems, protocol_problems,
-                 calibration_problems, study_problems):
+                 calibration_problems, options_problems, study_problems):
         out += step(config, root) if step is results_dir_problems else step(config)
     return out or scene_problems(config, root)
 

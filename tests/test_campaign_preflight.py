@@ -19,6 +19,8 @@ from campaign import preflight
 
 ROOT = Path(__file__).resolve().parents[1]
 CI = yaml.safe_load((ROOT / "config" / "ci.yaml").read_text())
+# without extra calibrate options: checking them imports calibrate (seconds), needed only by their own cases
+CI["calibration"]["options"] = ""
 
 
 def edited(**sections):
@@ -96,6 +98,12 @@ CASES = {
                             ["loading.pressures[0]", "1.0e+5"]),
     "both_rates": (edited(loading={"pressures": [1e5], "inertial_numbers": [1e-2], "wall_velocities": [0.1]}),
                    ["loading", "not both"]),
+    "calibration_option_misspelt": (edited(calibration={"options": "--bootstrapp 8"}),
+                                    ["calibration.options", "unrecognized arguments: --bootstrapp"]),
+    "calibration_option_bad_value": (edited(calibration={"options": "--bootstrap eight"}),
+                                     ["calibration.options", "--bootstrap: invalid int value: 'eight'"]),
+    "compare_option_misspelt": (edited(compare={"options": "--zoom-in 0.05"}),
+                                ["compare.options", "unrecognized arguments: --zoom-in"]),
     "schema_range": (edited(cell={"H_over_d": 1}), ["cell.H_over_d", "minimum of 4"]),
     "study_subset_outside_grid": (
         edited(accuracy={"dem_study": True, "base": {"kappa": 1e3, "inertial_number": 1e-2, "H_over_d": 8,
