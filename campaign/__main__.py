@@ -8,7 +8,8 @@ import sys
 
 from snakemake.utils import update_config
 
-from .preflight import ConfigProblem, check, load_configfile
+from .configfile import ConfigProblem, load_configfile
+from .preflight import check
 
 
 def main(argv=None) -> int:

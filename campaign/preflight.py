@@ -9,8 +9,9 @@ It holds what the schema (``workflow/schemas/config.schema.yaml``) cannot say:
 non-finite numbers, keys that must agree with each other (sampling intervals,
 bulk band and gap, a protocol's strains), case labels that two values would
 share, calibration sets and the sensitivity set naming what the campaign does
-not have, the results folder, and duplicated keys in the config file's text
-(which a YAML loader otherwise lets the last one win). Last, every scene the
+not have, extra calibrate / compare options their parsers refuse, the results
+folder, and duplicated keys in the config file's text (``configfile``: a YAML
+loader otherwise lets the last one win). Last, every scene the
 campaign would write is checked by yade_scripts' own validator, so nothing the
 DEM would refuse reaches its first job.
 
@@ -29,6 +30,7 @@ import yaml
 from dem_contract.labels import case_label, format_number
 
 from .calibration_sets import calibration_sets, same_value
+from .configfile import ConfigProblem, configfile_problems, load_configfile  # noqa: F401 (re-exported)
 from .cases import cases, rates
 from .scenes import scene_from_config
 
@@ -50,10 +52,6 @@ PACK_DEFAULTS = {"initial_solid_fraction": 0.4, "solid_fraction_guess": 0.8}
 BULK_EXCLUSION_DEFAULT = 3.0
 
 
-class ConfigProblem(ValueError):
-    """Bad config: its message is one line per problem."""
-
-
 def _v(x) -> str:
     return format_number(x) if isinstance(x, float) else repr(x) if isinstance(x, str) else str(x)
 
@@ -62,67 +60,6 @@ def problem(key: str, value, why: str, allowed: str | None = None, shown: str | 
     """One line: ``config error: key = value: why (allowed: ...)``; ``shown`` replaces the value's text."""
     text = f"config error: {key} = {_v(value) if shown is None else shown}: {why}"
     return text + (f" (allowed: {allowed})" if allowed else "")
-
-
-# --- the config file's text ----------------------------------------------------
-
-class _UniqueKeyLoader(yaml.SafeLoader):
-    """PyYAML's safe loader that refuses a key given twice in one mapping."""
-
-
-def _construct_mapping(loader, node, deep=False):
-    first = {}
-    for key_node, _ in node.value:
-        key = loader.construct_object(key_node, deep=deep)
-        if key in first:
-            raise yaml.constructor.ConstructorError(
-                None, None, f"duplicate key '{key}' (first given on line {first[key] + 1}; "
-                f"YAML would keep only the last one)", key_node.start_mark)
-        first[key] = key_node.start_mark.line
-    return loader.construct_mapping(node, deep=deep)
-
-
-_UniqueKeyLoader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _construct_mapping)
-
-
-def load_configfile(path) -> dict:
-    """The config file as a dict; ConfigProblem naming the file and line when it cannot be read.
-
-    A missing file, a folder, malformed YAML, a duplicated key or a top level
-    that is not a mapping are all refused.
-    """
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise ConfigProblem(f"config error: {path}: no such file") from None
-    except IsADirectoryError:
-        raise ConfigProblem(f"config error: {path}: is a folder, not a config file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ConfigProblem(f"config error: {path}: cannot be read ({exc})") from None
-    try:
-        doc = yaml.load(text, Loader=_UniqueKeyLoader)
-    except yaml.MarkedYAMLError as exc:
-        mark = exc.problem_mark
-        where = f"{path}:{mark.line + 1}" if mark is not None else str(path)
-        raise ConfigProblem(f"config error: {where}: {exc.problem}"
-                            + (f" ({exc.context})" if exc.context else "")) from None
-    except yaml.YAMLError as exc:
-        raise ConfigProblem(f"config error: {path}: not valid YAML ({exc})") from None
-    if not isinstance(doc, dict):
-        raise ConfigProblem(f"config error: {path}: the config must be a mapping of keys (campaign:, loading:, ...)")
-    return doc
-
-
-def configfile_problems(paths) -> list[str]:
-    """Problems of the config files' text (``load_configfile``), one per file."""
-    out = []
-    for path in paths:
-        try:
-            load_configfile(path)
-        except ConfigProblem as exc:
-            out.append(str(exc))
-    return out
 
 
 # --- values the schema cannot see ------------------------------------------------
