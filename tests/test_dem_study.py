@@ -97,8 +97,14 @@ def test_cost_model_matches_design_facts():
     assert grid.steps_per_strain(1e4, 1e-3, 0.3) / grid.steps_per_strain(1e3, 1e-3, 0.3) == pytest.approx(math.sqrt(10))
     assert grid.n_disks(37, 4) == pytest.approx(5000, rel=0.01)
     assert grid.n_disks(12, 4) == pytest.approx(500, rel=0.01)
-    assert grid.throughput(500) == pytest.approx(1.5e6) and grid.throughput(5000) == pytest.approx(0.8e6)
     assert grid.makespan([3, 2, 2, 1], cores=2) == 4
+
+
+def test_throughput_interpolates_the_measured_points_log_log_and_holds_outside():
+    (n0, r0), (n1, r1) = grid.THROUGHPUT
+    assert grid.throughput(n0) == pytest.approx(r0) and grid.throughput(n1) == pytest.approx(r1)
+    assert grid.throughput(math.sqrt(n0 * n1)) == pytest.approx(math.sqrt(r0 * r1))   # straight in log-log
+    assert grid.throughput(n0 / 10) == pytest.approx(r0) and grid.throughput(n1 * 10) == pytest.approx(r1)
 
 
 def test_default_subset_takes_about_an_hour_on_two_cores(paper):
