@@ -197,6 +197,59 @@ def protocol_problems(config: dict) -> list[str]:
     return out
 
 
+def calibrate_min_samples(config: dict, root=ROOT) -> int:
+    """Fewest rows calibrate accepts per DEM file: ``--min-samples`` of calibration.options, else its default.
+
+    The default is read from calibrate/io.py's ``MIN_SAMPLES = ...`` line (importing
+    calibrate costs seconds at every Snakemake start).
+    """
+    import ast
+    import shlex
+
+    argv = shlex.split((config.get("calibration") or {}).get("options", "") or "")
+    for i, arg in enumerate(argv):
+        value = arg.split("=", 1)[1] if arg.startswith("--min-samples=") else (
+            argv[i + 1] if arg == "--min-samples" and i + 1 < len(argv) else None)
+        if value is not None:
+            try:
+                return int(value)
+            except ValueError:
+                return 0  # options_problems names it
+    tree = ast.parse((Path(root) / "calibrate" / "io.py").read_text())
+    for node in tree.body:
+        if isinstance(node, ast.Assign) and any(getattr(t, "id", None) == "MIN_SAMPLES" for t in node.targets):
+            return int(ast.literal_eval(node.value))
+    from calibrate.io import MIN_SAMPLES
+
+    return MIN_SAMPLES
+
+
+def expected_rows(strain: float, fine_strain: float, sampling: dict) -> int:
+    """Rows a stage writes: one per fine_interval over its first ``fine_strain``, one per coarse_interval after.
+
+    yade_scripts/stages.py samples finely over the transition plus ``sampling.fine_window``
+    from the start of every shear stage, then coarsely.
+    """
+    fine = min(strain, fine_strain)
+    return int(fine / sampling["fine_interval"] + max(strain - fine, 0.0) / sampling["coarse_interval"]) + 1
+
+
+def sample_count_problems(config: dict, root=ROOT) -> list[str]:
+    """Every shear stage long enough for the rows calibrate needs per file."""
+    need = calibrate_min_samples(config, root)
+    s, out = config["sampling"], []
+    runs = [("preshear.strain", config["preshear"]["strain"], s["fine_window"])]
+    for name, spec in config["protocols"].items():
+        runs.append((f"protocols.{name}.strain", spec["strain"], spec.get("transition_strain", 0.0) + s["fine_window"]))
+    for key, strain, fine_strain in runs:
+        rows = expected_rows(strain, fine_strain, s)
+        if rows < need:
+            out.append(problem(key, strain, f"gives about {rows} samples with this sampling: calibrate needs "
+                               f"{need} per file (its --min-samples)",
+                               "a longer strain, finer sampling, or --min-samples in calibration.options"))
+    return out
+
+
 def calibration_problems(config: dict) -> list[str]:
     """Calibration sets that name what the campaign has; a sensitivity set that exists."""
     out = []
@@ -369,6 +422,8 @@ def check(config: dict, configfiles=(), schema_path=SCHEMA, root=ROOT) -> list[s
     for step in (results_dir_problems, loading_problems, cell_problems, protocol_problems,
                  calibration_problems, options_problems, study_problems):
         out += step(config, root) if step is results_dir_problems else step(config)
+    if not out:
+        out += sample_count_problems(config, root)  # (needs intervals in order and valid options)
     return out or scene_problems(config, root)
 
 

@@ -86,6 +86,8 @@ CASES = {
         ["protocols.sinusoidal.transition_strain", "<= 0.4"]),
     "heaviside_shorter_than_a_sample": (edited(protocols={"heaviside": {"strain": 0.001}}),
                                         ["protocols.heaviside.strain", ">= 0.002"]),
+    "too_few_samples_for_calibrate": (edited(protocols={"heaviside": {"strain": 0.05}}),
+                                      ["protocols.heaviside.strain", "about 26 samples", "needs 50"]),
     "preshear_shorter_than_a_sample": (edited(preshear={"strain": 0.001}), ["preshear.strain", ">= 0.005"]),
     "results_dir_root": (edited(results_dir="/"), ["results_dir", "root of the file system"]),
     "results_dir_empty": (edited(results_dir=""), ["results_dir"]),
@@ -161,6 +163,14 @@ def test_inertial_run_passes_with_the_override():
     config["loading"] = {"pressures": [1e5], "inertial_numbers": [0.05]}
     assert any("allow_inertial" in line for line in preflight.check(config))
     config["loading"]["allow_inertial"] = True
+    assert preflight.check(config) == []
+
+
+def test_short_runs_pass_when_calibrate_is_told_to_take_fewer_samples():
+    config = copy.deepcopy(CI)
+    config["protocols"]["heaviside"]["strain"] = 0.05
+    assert any("protocols.heaviside.strain" in line for line in preflight.check(config))
+    config["calibration"]["options"] = "--min-samples 20"
     assert preflight.check(config) == []
 
 

@@ -29,7 +29,8 @@ TINY = {
     "pack": {"initial_solid_fraction": 0.4, "solid_fraction_guess": 0.8},
     "preshear": {"strain": 0.2},
     "protocols": {"heaviside": {"strain": 0.05}},
-    "sampling": {"fine_interval": 0.002, "fine_window": 0.02, "coarse_interval": 0.01, "bulk_exclusion_d": 1},
+    # 126 and 51 rows: calibrate's 50 per file (the pre-flight check asks for them)
+    "sampling": {"fine_interval": 0.001, "fine_window": 0.05, "coarse_interval": 0.002, "bulk_exclusion_d": 1},
     "run": {"checkpoint_every_s": 60, "progress_every_s": 10},
     "calibration": {"options": "--bootstrap 8"},
     "accuracy": {"ode_work_precision": False},
