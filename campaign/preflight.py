@@ -20,6 +20,7 @@ DEM would refuse reaches its first job.
 """
 from __future__ import annotations
 
+import functools
 import importlib.util
 import math
 import re
@@ -40,16 +41,31 @@ SCHEMA = ROOT / "workflow" / "schemas" / "config.schema.yaml"
 #: Largest inertial number taken as quasi-static (the model's regime, docs/model.md):
 #: above it a campaign needs ``loading.allow_inertial: true``.
 QUASI_STATIC_MAX_I = 1.0e-2
-#: Range of I the DEM accepts (yade_scripts/scene.py, loading.inertial_number).
-I_RANGE = (1.0e-5, 0.1)
 #: Calibration set names are path parts and Snakemake wildcards (workflow/rules/common.smk).
 SET_NAME = re.compile(r"^[A-Za-z0-9.-]+(_[A-Za-z0-9.-]+)*$")
 #: Top-level folders of the repository that hold code or inputs: never a results folder.
 SOURCE_FOLDERS = {"campaign", "calibrate", "compare", "config", "dem_contract", "dem_study", "docs", "model",
                   "profiles", "tests", "workflow", "yade_scripts", ".git", ".snakemake"}
-# pack defaults of the scene (yade_scripts/scene.py)
-PACK_DEFAULTS = {"initial_solid_fraction": 0.4, "solid_fraction_guess": 0.8}
-BULK_EXCLUSION_DEFAULT = 3.0
+
+
+@functools.lru_cache(maxsize=None)
+def _scene_module(root=ROOT):
+    """yade_scripts/scene.py (pure Python), loaded from its file: yade_scripts is not a package."""
+    spec = importlib.util.spec_from_file_location("_yade_scene", Path(root) / "yade_scripts" / "scene.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def scene_default(section: str, key: str):
+    """The default the DEM takes for a scene key the config leaves out (yade_scripts/scene.py SPEC)."""
+    return _scene_module().SPEC[section][key][1]
+
+
+def inertial_number_range() -> tuple[float, float]:
+    """The inertial numbers the DEM accepts (yade_scripts/scene.py SPEC, loading.inertial_number)."""
+    spec = _scene_module().SPEC["loading"]["inertial_number"][0]
+    return spec["lo"], spec["hi"]
 
 
 def _v(x) -> str:
@@ -110,6 +126,7 @@ def loading_problems(config: dict) -> list[str]:
     """Rates within the DEM's range and the quasi-static bound; distinct case labels; integer seeds."""
     loading, out = config["loading"], []
     allow = bool(loading.get("allow_inertial", False))
+    i_lo, i_hi = inertial_number_range()
     out += _seed_problems(config["seeds"], "seeds")
     out += _seed_problems((config.get("accuracy") or {}).get("seeds"), "accuracy.seeds")
     for p in loading["pressures"]:
@@ -119,9 +136,9 @@ def loading_problems(config: dict) -> list[str]:
                 why = f"gives I = {I:.3g} at p = {format_number(p)} Pa (I = 2U/H d/sqrt(p/rho), H = H_over_d d)"
             else:
                 key, value, why = f"loading.inertial_numbers[{j}]", I, "I"
-            if not I_RANGE[0] <= I <= I_RANGE[1]:
+            if not i_lo <= I <= i_hi:
                 out.append(problem(key, value, f"{why} outside the DEM's range",
-                                   f"I in [{I_RANGE[0]:g}, {I_RANGE[1]:g}]"))
+                                   f"I in [{i_lo:g}, {i_hi:g}]"))
             elif I > QUASI_STATIC_MAX_I and not allow:
                 out.append(problem(key, value, f"{why} is above the quasi-static bound I <= {QUASI_STATIC_MAX_I:g} "
                                    "the model is made for",
@@ -152,14 +169,14 @@ def cell_problems(config: dict) -> list[str]:
         out.append(problem("sampling.fine_interval", s["fine_interval"],
                            f"is above sampling.coarse_interval = {_v(s['coarse_interval'])}",
                            "fine_interval <= coarse_interval"))
-    out += _bulk_problems(cell["H_over_d"], s.get("bulk_exclusion_d", BULK_EXCLUSION_DEFAULT), "the gap cell.H_over_d")
+    out += _bulk_problems(cell["H_over_d"], s.get("bulk_exclusion_d", scene_default("sampling", "bulk_exclusion_d")), "the gap cell.H_over_d")
     W = cell["W_over_H"] * cell["H_over_d"]
     if W < 3 * mat["size_ratio_max"]:
         out.append(problem("cell.W_over_H", cell["W_over_H"],
                            f"the periodic width {W:g} d cannot hold 3 of the largest disks "
                            f"({_v(mat['size_ratio_max'])} d)", f"W_over_H >= {3 * mat['size_ratio_max'] / cell['H_over_d']:.3g}"))
-    phi0 = pack.get("initial_solid_fraction", PACK_DEFAULTS["initial_solid_fraction"])
-    phi = pack.get("solid_fraction_guess", PACK_DEFAULTS["solid_fraction_guess"])
+    phi0 = pack.get("initial_solid_fraction", scene_default("pack", "initial_solid_fraction"))
+    phi = pack.get("solid_fraction_guess", scene_default("pack", "solid_fraction_guess"))
     if phi0 >= phi:
         out.append(problem("pack.initial_solid_fraction", phi0,
                            f"must be below pack.solid_fraction_guess = {_v(phi)} (the loose placement is compressed to it)",
@@ -363,24 +380,17 @@ def study_problems(config: dict) -> list[str]:
         points = grid.unique_points(grid.expand(acc))
     except (ValueError, KeyError) as exc:
         return [f"config error: {str(exc).strip(chr(39))}"]
-    bulk = config["sampling"].get("bulk_exclusion_d", BULK_EXCLUSION_DEFAULT)
+    bulk = config["sampling"].get("bulk_exclusion_d", scene_default("sampling", "bulk_exclusion_d"))
     out = []
     for H in sorted(set(points["H_over_d"])):
         out += _bulk_problems(H, bulk, "the DEM study's gap accuracy H_over_d")
     return out
 
 
-def _scene_validator(root=ROOT):
-    """yade_scripts/scene.py's validate, loaded from its file (yade_scripts is not a package)."""
-    spec = importlib.util.spec_from_file_location("_yade_scene", Path(root) / "yade_scripts" / "scene.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module.validate, module.SceneError
-
-
 def scene_problems(config: dict, root=ROOT) -> list[str]:
     """Every scene the campaign (and the DEM study) would write, through the DEM's own validator."""
-    validate, SceneError = _scene_validator(root)
+    module = _scene_module(root)
+    validate, SceneError = module.validate, module.SceneError
     scenes = [(label, scene_from_config(config, case, label)) for label, case in cases(config).items()]
     if (config.get("accuracy") or {}).get("dem_study", False):
         from dem_study import grid
