@@ -1,9 +1,14 @@
-# Shear reversal of a dense 2D granular layer: DEM campaign -> calibration -> model.
+# Shear reversal of a dense 2D granular layer: DEM campaign -> calibration -> comparison.
 # `snakemake -j2` runs the paper's campaign (config/config.yaml);
 # `snakemake -j2 --configfile config/quick.yaml` the quick one.
+import sys
+
 from snakemake.utils import min_version, validate
 
 min_version("9.0")
+
+# The repository's packages (campaign, dem_contract, dem_study) import from here.
+sys.path.insert(0, workflow.basedir)
 
 
 # The paper preset is the default; a --configfile replaces it (presets are
@@ -13,13 +18,17 @@ if not workflow.overwrite_configfiles:
     configfile: "config/config.yaml"
 
 
-validate(config, "workflow/schemas/config.schema.yaml")
+# Pre-flight: every bad input is named (key, value, allowed) before any job, exit code 2.
+from campaign import preflight
+
+preflight.stop_on_problems(preflight.check(config, workflow.configfiles))
+validate(config, "workflow/schemas/config.schema.yaml")  # fills the schema's defaults
 
 
 include: "workflow/rules/common.smk"
 include: "workflow/rules/dem.smk"
 include: "workflow/rules/calibrate.smk"
-include: "workflow/rules/model.smk"
+include: "workflow/rules/compare.smk"
 include: "workflow/rules/accuracy.smk"
 
 

@@ -4,11 +4,11 @@ r"""Command line of the model-against-DEM comparison.
 
     python -m compare predict --dem results/dem/p1_I0.001_s1 ... --params results/calibration/all/params.yaml \
         --set all --protocols heaviside sinusoidal [--train-cases LABEL ...] [--train-protocols ...] \
-        --out results/model/all
+        --out results/compare/all
         # -> predictions.csv, errors.csv, claims.csv, fig4_heaviside.png, fig5_sinusoidal.png
-    python -m compare heldout --errors results/model/*/errors.csv --out results/model/heldout_errors.csv
+    python -m compare heldout --errors results/compare/*/errors.csv --out results/compare/heldout_errors.csv
     python -m compare sensitivity --dem ... --params results/calibration/all/params.yaml --set all \
-        --protocols heaviside sinusoidal --out results/model/all
+        --protocols heaviside sinusoidal --out results/compare/all
         # -> sensitivity.csv, sensitivity_band.png
     python -m compare synthetic --out /tmp/dem [--noise]    # DEM-like cases made by model/, for trials
 

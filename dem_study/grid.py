@@ -4,8 +4,7 @@ Each axis (kappa, inertial number, cell height, time step, sampling interval)
 is varied with every other setting held at the base; a few seeds at the base
 give the seed-to-seed spread. A grid point is one DEM case (pack -> preshear ->
 heaviside) under ``<results>/accuracy/dem/<point>/``; its scene is the
-campaign's (``workflow/scripts/write_scene.scene_from_config``) with one key
-changed.
+campaign's (``campaign.scenes.scene_from_config``) with one key changed.
 
 The grids and the base live in the ``accuracy:`` block of the config (see
 ``workflow/schemas/config.schema.yaml``).
@@ -14,13 +13,10 @@ from __future__ import annotations
 
 import copy
 import math
-import sys
-from pathlib import Path
 
-import numpy as np
 import pandas as pd
 
-ROOT = Path(__file__).resolve().parents[1]
+from campaign.scenes import scene_from_config
 
 # axis -> (config section, key, short label for point names)
 AXES = {
@@ -43,9 +39,14 @@ FINEST = {
 BASE_LABEL = "base"
 REPEAT_PREFIX = "repeat:"
 
-# Throughput measured on YADE 2023.02a, one thread (DESIGN.md): particle-steps/s
-# at 500 and 5,000 disks; interpolated log-log in N, held constant outside.
-THROUGHPUT = ((500, 1.5e6), (5000, 0.8e6))
+# Throughput of YADE 2023.02a on one thread, particle-steps/s, at 500 and 5,000
+# disks; interpolated log-log in N, held constant outside. 500 disks: the
+# `particle_steps_per_s` of the quick campaign's sidecars (496 disks, kappa 1e3,
+# 2 cores with two YADE jobs side by side) read 2.2-2.5 M; we take 2.3 M.
+# 5,000 disks: 0.8 M (python3 yade_scripts/benchmark.py, README "Accuracy and cost").
+THROUGHPUT_500 = 2.3e6
+THROUGHPUT_5000 = 0.8e6
+THROUGHPUT = ((500, THROUGHPUT_500), (5000, THROUGHPUT_5000))
 # Pack: simulated time to converge, in d*sqrt(rho/p): 665 on a 211-disk cell at
 # kappa = 1e3 (yade_scripts/examples/tiny.json, 237k steps at dt = 0.1 t_c, 28 s);
 # assumed the same for every setting. It costs steps like any other time.
@@ -181,7 +182,7 @@ def n_disks(H_over_d: float, W_over_H: float, guess: float = 0.8,
 
 
 def throughput(n: float) -> float:
-    """Particle-steps per second on one thread for n disks (DESIGN.md)."""
+    """Particle-steps per second on one thread for n disks (``THROUGHPUT``)."""
     (n0, r0), (n1, r1) = THROUGHPUT
     f = min(max(math.log(n / n0) / math.log(n1 / n0), 0.0), 1.0)
     return math.exp(math.log(r0) + f * math.log(r1 / r0))
@@ -228,15 +229,6 @@ def estimate(config: dict) -> pd.DataFrame:
 
 # --- scenes -------------------------------------------------------------------
 
-def _scene_from_config():
-    """workflow/scripts/write_scene.scene_from_config, imported (not copied)."""
-    scripts = str(ROOT / "workflow" / "scripts")
-    if scripts not in sys.path:
-        sys.path.insert(0, scripts)
-    from write_scene import scene_from_config
-    return scene_from_config
-
-
 def point_config(config: dict, setting: dict) -> dict:
     """A copy of the campaign config with the point's setting and the study's protocol."""
     acc = config["accuracy"]
@@ -259,6 +251,6 @@ def point_scene(config: dict, point: str) -> dict:
     cfg = point_config(config, row)
     case = dict(pressure=float(config["loading"]["pressures"][0]),
                 inertial_number=float(row["inertial_number"]), seed=int(row["seed"]))
-    scene = _scene_from_config()(cfg, case, point)
+    scene = scene_from_config(cfg, case, point)
     scene["meta"]["study"] = "accuracy"
     return scene

@@ -120,3 +120,25 @@ def test_config_schema_ranges_match_the_scene_validator():
             assert (high, "exclusiveMaximum" in rule) == (spec["hi"], spec["hi_open"]), f"{section}.{key} high"
             compared += 1
     assert compared >= 20
+
+
+def test_every_rule_has_a_log_and_a_benchmark_and_the_study_reuses_the_dem_rules():
+    """Every rule that runs a job (all but the target rule `all`) keeps its log and its benchmark;
+    the DEM study's stages are the campaign's rules (one YADE command, in dem.smk)."""
+    from snakemake.api import SnakemakeApi
+    from snakemake.settings.types import ConfigSettings, OutputSettings, ResourceSettings, StorageSettings
+
+    with SnakemakeApi(OutputSettings()) as api:
+        workflow = api.workflow(
+            resource_settings=ResourceSettings(), storage_settings=StorageSettings(),
+            config_settings=ConfigSettings(configfiles=[ROOT / "config" / "config.yaml"]),  # every rule in use
+            snakefile=ROOT / "Snakefile", workdir=ROOT)
+        rules = {rule.name: rule for rule in workflow._workflow.rules}
+    assert {"scene", "dem_pack", "calibrate", "compare_predict", "dem_study_pack"} <= set(rules)
+    missing = [name for name, rule in rules.items() if name != "all" and not (rule.log and rule.benchmark)]
+    assert missing == []
+    for campaign_rule, study_rule in [("dem_pack", "dem_study_pack"), ("dem_preshear", "dem_study_preshear"),
+                                      ("dem_reversal", "dem_study_heaviside")]:
+        assert rules[study_rule].shellcmd == rules[campaign_rule].shellcmd
+    assert "run_stage.py" not in (ROOT / "workflow" / "rules" / "accuracy.smk").read_text()
+

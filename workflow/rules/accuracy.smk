@@ -25,29 +25,26 @@ rule ode_work_precision:
 
 # --- DEM resolution study ------------------------------------------------------
 # One factor at a time around accuracy.base (dem_study/grid.py): each point is a
-# DEM case under {RESULTS}/accuracy/dem/<point>/, run by the same YADE stages as
-# the campaign (pack -> preshear -> heaviside), with the campaign's scene
-# (write_scene.scene_from_config) changed in one key.
+# DEM case under {RESULTS}/accuracy/dem/<point>/, run by the campaign's own YADE
+# rules (dem.smk, reused below), with the campaign's scene
+# (campaign.scenes.scene_from_config) changed in one key.
 #
-# Cost of the default subset of config/config.yaml, estimated from DESIGN.md's
-# throughput (1.5 M particle-steps/s at 500 disks, 0.8 M at 5,000, one thread),
-# steps per unit strain sqrt(4 kappa/pi)/(I dt_over_tc) over 1.9 strain, plus a
-# pack of 665 time units (measured): 16 DEM cases, about 2.1 core-hours, about
-# 1.05 h on 2 cores (the H = 37 d point alone is about 48 min). The full grid:
-# 28 cases, about 2.9 core-hours. `python -m dem_study estimate --configfile
-# config/config.yaml [--subset full]` prints the estimate per point.
-sys.path.insert(0, str(Path(workflow.basedir)))
-from dem_study import grid as dem_grid  # noqa: E402
+# Cost of the default subset of config/config.yaml, estimated from the measured
+# throughput (dem_study/grid.py THROUGHPUT: 2.3 M particle-steps/s at 500 disks,
+# 0.8 M at 5,000, one thread), steps per unit strain sqrt(4 kappa/pi)/(I dt_over_tc)
+# over 1.9 strain, plus a pack of 665 time units (measured): 16 DEM cases, about
+# 1.7 core-hours, about 0.85 h on 2 cores (the H = 37 d point alone about 48 min);
+# with the 3 repeated kappa = 1e5 seeds 19 cases, 2.5 core-hours, 1.3 h on 2 cores
+# (measured: 36 min + 13 min). The full grid: 28 cases, about 2.3 core-hours.
+# `python -m dem_study estimate --configfile config/config.yaml [--subset full]`
+# prints the estimate per point.
+from dem_study import grid as dem_grid
 
 ACCURACY = config.get("accuracy", {})
 DEM_STUDY = bool(ACCURACY.get("dem_study", False))
 ACC_DEM = f"{RESULTS}/accuracy/dem"
 DEM_POINTS = dem_grid.expand(ACCURACY) if DEM_STUDY else None
 DEM_POINT_NAMES = list(dem_grid.unique_points(DEM_POINTS)["point"]) if DEM_STUDY else []
-YADE_STAGE = (
-    "OMP_NUM_THREADS=1 {YADE} -n -x yade_scripts/run_stage.py"
-    " {input.scene} {params.stage} {params.case_dir} > {log} 2>&1"
-)
 
 
 wildcard_constraints:
@@ -61,28 +58,36 @@ rule dem_study_points:
         rows=DEM_POINTS.to_dict("records") if DEM_STUDY else [],  # reruns when the grid changes
     log:
         f"{RESULTS}/logs/accuracy/dem_study_points.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/accuracy/dem_study_points.tsv"
     localrule: True
-    script:
-        "../../dem_study/smk_inputs.py"
+    run:
+        DEM_POINTS.to_csv(output[0], index=False)
+        with open(log[0], "w") as fh:
+            print(f"{len(DEM_POINTS)} rows, {len(DEM_POINT_NAMES)} DEM cases", file=fh)
 
 
-rule dem_study_scene:
+def point_scene(point):
+    return dem_grid.point_scene(config, point)
+
+
+use rule scene as dem_study_scene with:
     output:
         f"{ACC_DEM}/{{point}}/scene.json",
     params:
-        scene=lambda wc: dem_grid.point_scene(config, wc.point),  # reruns when the scene changes
+        result=lambda wc: result_key(point_scene(wc.point)),
     log:
         f"{RESULTS}/logs/accuracy/dem/{{point}}/scene.log",
-    localrule: True
-    script:
-        "../../dem_study/smk_inputs.py"
+    benchmark:
+        f"{RESULTS}/benchmarks/accuracy/dem/{{point}}/scene.tsv"
 
 
-rule dem_study_pack:
+use rule dem_pack as dem_study_pack with:
     input:
         scene=rules.dem_study_scene.output[0],
     output:
         state=f"{ACC_DEM}/{{point}}/pack.final.yade.gz",
+        series=f"{ACC_DEM}/{{point}}/pack.csv",
         sidecar=f"{ACC_DEM}/{{point}}/pack.json",
     params:
         stage="pack",
@@ -91,12 +96,9 @@ rule dem_study_pack:
         f"{RESULTS}/logs/accuracy/dem/{{point}}/pack.log",
     benchmark:
         f"{RESULTS}/benchmarks/accuracy/dem/{{point}}/pack.tsv"
-    threads: 1
-    shell:
-        YADE_STAGE
 
 
-rule dem_study_preshear:
+use rule dem_preshear as dem_study_preshear with:
     input:
         scene=rules.dem_study_scene.output[0],
         state=rules.dem_study_pack.output.state,
@@ -111,12 +113,9 @@ rule dem_study_preshear:
         f"{RESULTS}/logs/accuracy/dem/{{point}}/preshear.log",
     benchmark:
         f"{RESULTS}/benchmarks/accuracy/dem/{{point}}/preshear.tsv"
-    threads: 1
-    shell:
-        YADE_STAGE
 
 
-rule dem_study_heaviside:
+use rule dem_reversal as dem_study_heaviside with:
     input:
         scene=rules.dem_study_scene.output[0],
         state=rules.dem_study_preshear.output.state,
@@ -131,9 +130,6 @@ rule dem_study_heaviside:
         f"{RESULTS}/logs/accuracy/dem/{{point}}/heaviside.log",
     benchmark:
         f"{RESULTS}/benchmarks/accuracy/dem/{{point}}/heaviside.tsv"
-    threads: 1
-    shell:
-        YADE_STAGE
 
 
 rule dem_study:

@@ -3,40 +3,9 @@
 # protocols it learns from (the held-out comparisons use the others).
 
 
-def calibration_sets():
-    """Calibration sets: name -> dict(cases=[labels], protocols=[...]).
+from campaign.calibration_sets import calibration_sets
 
-    A set may restrict protocols and pick pressures / inertial numbers; "all"
-    (or a missing key) keeps every value of the campaign. The set "all" always
-    exists: every case and every protocol; so do one set per pressure and one
-    per inertial number when the campaign has several.
-    """
-    sets = {"all": {}}
-    # With several loadings, one set per pressure and per inertial number: the
-    # held-out comparison calibrates on one and predicts the others.
-    pressures = sorted({case["pressure"] for case in CASES.values()})
-    rates = sorted({case["inertial_number"] for case in CASES.values()})
-    if len(pressures) > 1:
-        sets.update({f"p{_fmt(p)}": {"pressures": [p]} for p in pressures})
-    if len(rates) > 1:
-        sets.update({f"I{_fmt(I)}": {"inertial_numbers": [I]} for I in rates})
-    sets.update(config.get("calibration", {}).get("sets", {}))
-    out = {}
-    for name, spec in sets.items():
-        protocols = [p for p in spec.get("protocols", PROTOCOLS) if p in PROTOCOLS]
-        labels = [
-            label
-            for label, case in CASES.items()
-            if spec.get("pressures", "all") == "all" or case["pressure"] in spec["pressures"]
-            if spec.get("inertial_numbers", "all") == "all"
-            or any(abs(case["inertial_number"] / I - 1) < 1e-6 for I in spec["inertial_numbers"])
-        ]
-        if labels and protocols:
-            out[name] = dict(cases=labels, protocols=protocols)
-    return out
-
-
-CALIBRATION_SETS = calibration_sets()
+CALIBRATION_SETS = calibration_sets(config, CASES)  # name -> dict(cases, protocols)
 CALIBRATION_FIGURES = [
     "fig2a_stress_vs_Axy",
     "fig2b_mu_vs_X",
@@ -44,6 +13,16 @@ CALIBRATION_FIGURES = [
     "fig3b_alpha2_vs_X",
 ]
 CALIBRATION_TABLES = ["params_table", "backsolve_alpha_vs_X", "fit_quality"]
+# Also written by python -m calibrate (calibrate/pipeline.py), not in the report:
+# the bootstrap replicates, their held-out scores, and the fitted curves on the DEM.
+CALIBRATION_EXTRA = {
+    "bootstrap": "bootstrap_values.csv",
+    "heldout": "heldout_scores.csv",
+    "curves": "fig_curves_model_vs_dem.png",
+}
+# calibrate writes heldout_scores.csv only when a bootstrap replicate held a seed
+# out (never with one seed): the rule then leaves its header alone in the file.
+HELDOUT_HEADER = "replicate,route,model,n_heldout_runs"
 
 
 def calibration_params(calset):
@@ -77,6 +56,7 @@ rule calibrate:
             )
             for name in CALIBRATION_FIGURES
         ],
+        **{key: f"{RESULTS}/calibration/{{calset}}/{name}" for key, name in CALIBRATION_EXTRA.items()},
     params:
         dirs=lambda wc: [case_dir(label) for label in CALIBRATION_SETS[wc.calset]["cases"]],
         protocols=lambda wc: CALIBRATION_SETS[wc.calset]["protocols"],
@@ -90,6 +70,7 @@ rule calibrate:
     shell:
         "{PY} -m calibrate --dem {params.dirs} --protocols {params.protocols}"
         " --out {params.out} {params.options} > {log} 2>&1"
+        " && {{ test -e {output.heldout} || echo {HELDOUT_HEADER} > {output.heldout}; }}"
 
 
 def calibration_targets():

@@ -1,36 +1,15 @@
 # Helpers shared by every rule file: the case table and the list of targets.
+# The case table and the scenes come from the campaign package (campaign/).
 import sys
-from itertools import product
+
+from campaign.cases import cases
+from campaign.scenes import result_key, scene_from_config, scene_of_result_key, write_scene
 
 PY = sys.executable  # the venv's python that runs snakemake also runs the stages
 RESULTS = config.get("results_dir", "results")
 YADE = "yade"
 
-
-def _fmt(x):
-    return f"{x:.6g}".replace("+", "")
-
-
-def cases():
-    """One row per (pressure, inertial number, seed): the DEM cases.
-
-    Returns a dict label -> dict(pressure, inertial_number, seed).
-    """
-    loading, mat, cell = config["loading"], config["material"], config["cell"]
-    table = {}
-    for p in loading["pressures"]:
-        if "inertial_numbers" in loading:
-            rates = loading["inertial_numbers"]
-        else:  # U -> I with the nominal gap
-            d, rho, H = mat["diameter"], mat["density"], cell["H_over_d"] * mat["diameter"]
-            rates = [2 * U / H * d / (p / rho) ** 0.5 for U in loading["wall_velocities"]]
-        for I, seed in product(rates, config["seeds"]):
-            label = f"p{_fmt(p)}_I{_fmt(I)}_s{seed}"
-            table[label] = dict(pressure=float(p), inertial_number=float(I), seed=int(seed))
-    return table
-
-
-CASES = cases()
+CASES = cases(config)  # label -> dict(pressure, inertial_number, seed)
 PROTOCOLS = list(config["protocols"])
 
 
@@ -49,7 +28,7 @@ def dem_outputs(protocols=None):
 
 def all_targets():
     targets = dem_outputs() + [f"{RESULTS}/dem/campaign_summary.csv"]
-    targets += calibration_targets() + model_targets() + accuracy_targets()
+    targets += calibration_targets() + compare_targets() + accuracy_targets()
     return targets
 
 

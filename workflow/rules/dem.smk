@@ -1,22 +1,41 @@
 # DEM stages under YADE: scene -> pack -> preshear -> heaviside | sinusoidal.
 # One pre-shear per case feeds every reversal protocol. YADE runs on one thread,
-# so `-j2` runs two cases side by side.
+# so `-j2` runs two cases side by side. The DEM study (accuracy.smk) reuses these
+# rules on its own points (`use rule ... with:`).
 
 wildcard_constraints:
     case="p[^/_]+_I[^/_]+_s[0-9]+",
     protocol="|".join(PROTOCOLS),
 
 
+# One YADE stage: run_stage.py reads the scene, resumes from a checkpoint in
+# <case_dir>/.partial/ if there is one, and writes the stage's outputs.
+YADE_STAGE = (
+    "OMP_NUM_THREADS=1 {YADE} -n -x yade_scripts/run_stage.py"
+    " {input.scene} {params.stage} {params.case_dir} > {log} 2>&1"
+)
+
+
+def case_scene(label):
+    return scene_from_config(config, CASES[label], label)
+
+
+# The scene's result-relevant content is the rule's parameter: editing any config
+# value that enters it (material, cell, pack, sampling, a protocol's strain, ...)
+# reruns the scene and so every DEM stage of every case (Snakemake's params
+# trigger); other edits (calibration, compare, run intervals) rerun no DEM.
 rule scene:
     output:
         f"{RESULTS}/dem/{{case}}/scene.json",
     params:
-        case=lambda wc: CASES[wc.case],
+        result=lambda wc: result_key(case_scene(wc.case)),
     log:
-        f"{RESULTS}/logs/scene/{{case}}.log",
+        f"{RESULTS}/logs/dem/{{case}}/scene.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/dem/{{case}}/scene.tsv"
     localrule: True
-    script:
-        "../scripts/write_scene.py"
+    run:
+        write_scene(scene_of_result_key(params.result, config), output[0], log[0])
 
 
 rule dem_pack:
@@ -24,8 +43,10 @@ rule dem_pack:
         scene=rules.scene.output[0],
     output:
         state=f"{RESULTS}/dem/{{case}}/pack.final.yade.gz",
+        series=f"{RESULTS}/dem/{{case}}/pack.csv",
         sidecar=f"{RESULTS}/dem/{{case}}/pack.json",
     params:
+        stage="pack",
         case_dir=lambda wc: case_dir(wc.case),
     log:
         f"{RESULTS}/logs/dem/{{case}}/pack.log",
@@ -33,7 +54,7 @@ rule dem_pack:
         f"{RESULTS}/benchmarks/dem/{{case}}/pack.tsv"
     threads: 1
     shell:
-        "OMP_NUM_THREADS=1 {YADE} -n -x yade_scripts/run_stage.py {input.scene} pack {params.case_dir} > {log} 2>&1"
+        YADE_STAGE
 
 
 rule dem_preshear:
@@ -45,6 +66,7 @@ rule dem_preshear:
         series=f"{RESULTS}/dem/{{case}}/preshear.csv",
         sidecar=f"{RESULTS}/dem/{{case}}/preshear.json",
     params:
+        stage="preshear",
         case_dir=lambda wc: case_dir(wc.case),
     log:
         f"{RESULTS}/logs/dem/{{case}}/preshear.log",
@@ -52,7 +74,7 @@ rule dem_preshear:
         f"{RESULTS}/benchmarks/dem/{{case}}/preshear.tsv"
     threads: 1
     shell:
-        "OMP_NUM_THREADS=1 {YADE} -n -x yade_scripts/run_stage.py {input.scene} preshear {params.case_dir} > {log} 2>&1"
+        YADE_STAGE
 
 
 rule dem_reversal:
@@ -64,6 +86,7 @@ rule dem_reversal:
         series=f"{RESULTS}/dem/{{case}}/{{protocol}}.csv",
         sidecar=f"{RESULTS}/dem/{{case}}/{{protocol}}.json",
     params:
+        stage=lambda wc: wc.protocol,
         case_dir=lambda wc: case_dir(wc.case),
     log:
         f"{RESULTS}/logs/dem/{{case}}/{{protocol}}.log",
@@ -71,7 +94,7 @@ rule dem_reversal:
         f"{RESULTS}/benchmarks/dem/{{case}}/{{protocol}}.tsv"
     threads: 1
     shell:
-        "OMP_NUM_THREADS=1 {YADE} -n -x yade_scripts/run_stage.py {input.scene} {wildcards.protocol} {params.case_dir} > {log} 2>&1"
+        YADE_STAGE
 
 
 rule dem_summary:
@@ -92,5 +115,7 @@ rule dem_summary:
         cases=CASES,
     log:
         f"{RESULTS}/logs/dem/summary.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/dem/summary.tsv"
     script:
         "../scripts/summarize_campaign.py"

@@ -1,21 +1,24 @@
-# The continuum model against the DEM (python -m compare, see compare/README.md).
+# The comparison stage: the continuum models against the DEM (python -m compare,
+# see compare/README.md), outputs under {RESULTS}/compare/.
 # Per calibration set: Model 1 and Model 2 integrated on every DEM run's own
 # imposed history from its pre-reversal fabric -> errors, claims, Fig. 4 / Fig. 5.
 # Across sets: in-sample against out-of-sample errors. For one set: sensitivity.
-# Optional config keys under `model:` (all have defaults):
+# Optional config keys under `compare:` (all have defaults):
 #   sensitivity_set: calibration set whose parameters are perturbed ("all")
-#   compare_options: extra options of `compare predict` (e.g. "--zoom 0.05")
+#   options: extra options of `compare predict` (e.g. "--zoom 0.05")
 
-MODEL_FIGURES = {"heaviside": "fig4_heaviside", "sinusoidal": "fig5_sinusoidal"}
-MODEL_TABLES = ["errors", "claims"]
-SENSITIVITY_SET = config.get("model", {}).get("sensitivity_set", "all")
+COMPARE = f"{RESULTS}/compare"
+COMPARE_FIGURES = {"heaviside": "fig4_heaviside", "sinusoidal": "fig5_sinusoidal"}
+COMPARE_TABLES = ["errors", "claims"]
+COMPARE_CATEGORY = "Models against the DEM"
+SENSITIVITY_SET = config.get("compare", {}).get("sensitivity_set", "all")
 
 
 wildcard_constraints:
     calset="|".join(CALIBRATION_SETS) or "all",
 
 
-def model_dem_inputs(wildcards=None):
+def compare_dem_inputs(wildcards=None):
     """Every pre-shear and reversal run the comparison reads (all cases, all protocols)."""
     return [
         f"{case_dir(label)}/{stage}.csv"
@@ -24,42 +27,42 @@ def model_dem_inputs(wildcards=None):
     ]
 
 
-rule model_predict:
+rule compare_predict:
     input:
         params=lambda wc: calibration_params(wc.calset),
-        series=model_dem_inputs,
+        series=compare_dem_inputs,
     output:
-        predictions=f"{RESULTS}/model/{{calset}}/predictions.csv",
+        predictions=f"{COMPARE}/{{calset}}/predictions.csv",
         tables=[
             report(
-                f"{RESULTS}/model/{{calset}}/{name}.csv",
+                f"{COMPARE}/{{calset}}/{name}.csv",
                 caption=f"../report/{name}.rst",
-                category="Model against DEM",
+                category=COMPARE_CATEGORY,
                 subcategory="{calset}",
             )
-            for name in MODEL_TABLES
+            for name in COMPARE_TABLES
         ],
         figures=[
             report(
-                f"{RESULTS}/model/{{calset}}/{MODEL_FIGURES[proto]}.png",
-                caption=f"../report/{MODEL_FIGURES[proto]}.rst",
-                category="Model against DEM",
+                f"{COMPARE}/{{calset}}/{COMPARE_FIGURES[proto]}.png",
+                caption=f"../report/{COMPARE_FIGURES[proto]}.rst",
+                category=COMPARE_CATEGORY,
                 subcategory="{calset}",
             )
             for proto in PROTOCOLS
-            if proto in MODEL_FIGURES
+            if proto in COMPARE_FIGURES
         ],
     params:
         dirs=[case_dir(label) for label in CASES],
-        protocols=[p for p in PROTOCOLS if p in MODEL_FIGURES],
+        protocols=[p for p in PROTOCOLS if p in COMPARE_FIGURES],
         train_cases=lambda wc: CALIBRATION_SETS[wc.calset]["cases"],
         train_protocols=lambda wc: CALIBRATION_SETS[wc.calset]["protocols"],
-        out=lambda wc: f"{RESULTS}/model/{wc.calset}",
-        options=config.get("model", {}).get("compare_options", ""),
+        out=lambda wc: f"{COMPARE}/{wc.calset}",
+        options=config.get("compare", {}).get("options", ""),
     log:
-        f"{RESULTS}/logs/model/predict_{{calset}}.log",
+        f"{RESULTS}/logs/compare/predict_{{calset}}.log",
     benchmark:
-        f"{RESULTS}/benchmarks/model/predict_{{calset}}.tsv"
+        f"{RESULTS}/benchmarks/compare/predict_{{calset}}.tsv"
     threads: 1
     shell:
         "{PY} -m compare predict --dem {params.dirs} --params {input.params} --set {wildcards.calset}"
@@ -67,68 +70,65 @@ rule model_predict:
         " --train-protocols {params.train_protocols} --out {params.out} {params.options} > {log} 2>&1"
 
 
-rule model_heldout:
+rule compare_heldout:
     input:
-        errors=expand(f"{RESULTS}/model/{{calset}}/errors.csv", calset=list(CALIBRATION_SETS)),
+        errors=expand(f"{COMPARE}/{{calset}}/errors.csv", calset=list(CALIBRATION_SETS)),
     output:
         report(
-            f"{RESULTS}/model/heldout_errors.csv",
+            f"{COMPARE}/heldout_errors.csv",
             caption="../report/heldout_errors.rst",
-            category="Model against DEM",
+            category=COMPARE_CATEGORY,
         ),
     log:
-        f"{RESULTS}/logs/model/heldout.log",
+        f"{RESULTS}/logs/compare/heldout.log",
     benchmark:
-        f"{RESULTS}/benchmarks/model/heldout.tsv"
+        f"{RESULTS}/benchmarks/compare/heldout.tsv"
     threads: 1
     shell:
         "{PY} -m compare heldout --errors {input.errors} --out {output} > {log} 2>&1"
 
 
-rule model_sensitivity:
+rule compare_sensitivity:
     input:
         params=calibration_params(SENSITIVITY_SET),
-        series=model_dem_inputs,
+        series=compare_dem_inputs,
     output:
         table=report(
-            f"{RESULTS}/model/{SENSITIVITY_SET}/sensitivity.csv",
+            f"{COMPARE}/{SENSITIVITY_SET}/sensitivity.csv",
             caption="../report/sensitivity.rst",
-            category="Model against DEM",
+            category=COMPARE_CATEGORY,
             subcategory=SENSITIVITY_SET,
         ),
         figure=report(
-            f"{RESULTS}/model/{SENSITIVITY_SET}/sensitivity_band.png",
+            f"{COMPARE}/{SENSITIVITY_SET}/sensitivity_band.png",
             caption="../report/sensitivity_band.rst",
-            category="Model against DEM",
+            category=COMPARE_CATEGORY,
             subcategory=SENSITIVITY_SET,
         ),
     params:
         dirs=[case_dir(label) for label in CASES],
-        protocols=[p for p in PROTOCOLS if p in MODEL_FIGURES],
-        out=f"{RESULTS}/model/{SENSITIVITY_SET}",
+        protocols=[p for p in PROTOCOLS if p in COMPARE_FIGURES],
+        out=f"{COMPARE}/{SENSITIVITY_SET}",
     log:
-        f"{RESULTS}/logs/model/sensitivity_{SENSITIVITY_SET}.log",
+        f"{RESULTS}/logs/compare/sensitivity_{SENSITIVITY_SET}.log",
     benchmark:
-        f"{RESULTS}/benchmarks/model/sensitivity_{SENSITIVITY_SET}.tsv"
+        f"{RESULTS}/benchmarks/compare/sensitivity_{SENSITIVITY_SET}.tsv"
     threads: 1
     shell:
         "{PY} -m compare sensitivity --dem {params.dirs} --params {input.params} --set {SENSITIVITY_SET}"
         " --protocols {params.protocols} --out {params.out} > {log} 2>&1"
 
 
-def model_targets():
+def compare_targets():
     """Per calibration set: predictions, errors, claims, Fig. 4/5; across sets: held-out table; sensitivity."""
     targets = []
     for calset in CALIBRATION_SETS:
-        targets.append(f"{RESULTS}/model/{calset}/predictions.csv")
-        targets += [f"{RESULTS}/model/{calset}/{name}.csv" for name in MODEL_TABLES]
+        targets.append(f"{COMPARE}/{calset}/predictions.csv")
+        targets += [f"{COMPARE}/{calset}/{name}.csv" for name in COMPARE_TABLES]
         targets += [
-            f"{RESULTS}/model/{calset}/{MODEL_FIGURES[p]}.png" for p in PROTOCOLS if p in MODEL_FIGURES
+            f"{COMPARE}/{calset}/{COMPARE_FIGURES[p]}.png" for p in PROTOCOLS if p in COMPARE_FIGURES
         ]
-    targets.append(f"{RESULTS}/model/heldout_errors.csv")
+    targets.append(f"{COMPARE}/heldout_errors.csv")
     if SENSITIVITY_SET in CALIBRATION_SETS:
-        targets += [
-            f"{RESULTS}/model/{SENSITIVITY_SET}/sensitivity.csv",
-            f"{RESULTS}/model/{SENSITIVITY_SET}/sensitivity_band.png",
-        ]
+        targets += rules.compare_sensitivity.output
     return targets

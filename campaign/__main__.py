@@ -1,0 +1,37 @@
+"""python -m campaign check CONFIGFILE [CONFIGFILE ...]: the workflow's pre-flight check, alone.
+
+Later files override earlier ones, as with ``snakemake --configfile a.yaml b.yaml``.
+Exit 0 when the campaign may start, 2 with one line per problem otherwise.
+"""
+import argparse
+import sys
+
+from snakemake.utils import update_config
+
+from .configfile import ConfigProblem, load_configfile
+from .preflight import check
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m campaign", description=__doc__.splitlines()[0])
+    sub = parser.add_subparsers(dest="command", required=True)
+    c = sub.add_parser("check", help="check config files as the Snakefile does before any job")
+    c.add_argument("configfiles", nargs="+")
+    args = parser.parse_args(argv)
+    config = {}
+    try:
+        for path in args.configfiles:
+            update_config(config, load_configfile(path))
+    except ConfigProblem as exc:
+        print(exc, file=sys.stderr)
+        return 2
+    problems = check(config, args.configfiles)
+    if problems:
+        print("\n".join(problems), file=sys.stderr)
+        return 2
+    print(f"{', '.join(args.configfiles)}: ok")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,447 @@
+"""The pre-flight check: every bad config is named before any job runs.
+
+The Snakefile calls ``check`` right after loading the config and stops with exit
+code 2 and one line per problem when it finds any::
+
+    config error: <key> = <value>: <what is wrong> (allowed: <what would do>)
+
+It holds what the schema (``workflow/schemas/config.schema.yaml``) cannot say:
+non-finite numbers, keys that must agree with each other (sampling intervals,
+bulk band and gap, a protocol's strains), case labels that two values would
+share, calibration sets and the sensitivity set naming what the campaign does
+not have, extra calibrate / compare options their parsers refuse, the results
+folder, and duplicated keys in the config file's text (``configfile``: a YAML
+loader otherwise lets the last one win). Last, every scene the
+campaign would write is checked by yade_scripts' own validator, so nothing the
+DEM would refuse reaches its first job.
+
+``python -m campaign check CONFIGFILE...`` runs the same check outside Snakemake
+(it also names a missing or malformed file with its line).
+"""
+from __future__ import annotations
+
+import functools
+import importlib.util
+import math
+import re
+from pathlib import Path
+
+import yaml
+
+from dem_contract.labels import case_label, format_number
+
+from .calibration_sets import calibration_sets, same_value
+from .configfile import ConfigProblem, configfile_problems, load_configfile  # noqa: F401 (re-exported)
+from .cases import cases, rates
+from .scenes import scene_from_config
+
+ROOT = Path(__file__).resolve().parents[1]
+SCHEMA = ROOT / "workflow" / "schemas" / "config.schema.yaml"
+
+#: Largest inertial number taken as quasi-static (the model's regime, docs/model.md):
+#: above it a campaign needs ``loading.allow_inertial: true``.
+QUASI_STATIC_MAX_I = 1.0e-2
+#: Calibration set names are path parts and Snakemake wildcards (workflow/rules/common.smk).
+SET_NAME = re.compile(r"^[A-Za-z0-9.-]+(_[A-Za-z0-9.-]+)*$")
+#: Top-level folders of the repository that hold code or inputs: never a results folder.
+SOURCE_FOLDERS = {"campaign", "calibrate", "compare", "config", "dem_contract", "dem_study", "docs", "model",
+                  "profiles", "tests", "workflow", "yade_scripts", ".git", ".snakemake"}
+
+
+@functools.lru_cache(maxsize=None)
+def _scene_module(root=ROOT):
+    """yade_scripts/scene.py (pure Python), loaded from its file: yade_scripts is not a package."""
+    spec = importlib.util.spec_from_file_location("_yade_scene", Path(root) / "yade_scripts" / "scene.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def scene_default(section: str, key: str):
+    """The default the DEM takes for a scene key the config leaves out (yade_scripts/scene.py SPEC)."""
+    return _scene_module().SPEC[section][key][1]
+
+
+def inertial_number_range() -> tuple[float, float]:
+    """The inertial numbers the DEM accepts (yade_scripts/scene.py SPEC, loading.inertial_number)."""
+    spec = _scene_module().SPEC["loading"]["inertial_number"][0]
+    return spec["lo"], spec["hi"]
+
+
+def _v(x) -> str:
+    return format_number(x) if isinstance(x, float) else repr(x) if isinstance(x, str) else str(x)
+
+
+def problem(key: str, value, why: str, allowed: str | None = None, shown: str | None = None) -> str:
+    """One line: ``config error: key = value: why (allowed: ...)``; ``shown`` replaces the value's text."""
+    text = f"config error: {key} = {_v(value) if shown is None else shown}: {why}"
+    return text + (f" (allowed: {allowed})" if allowed else "")
+
+
+# --- values the schema cannot see ------------------------------------------------
+
+def _walk(node, key=""):
+    if isinstance(node, dict):
+        for k, v in node.items():
+            yield from _walk(v, f"{key}.{k}" if key else str(k))
+    elif isinstance(node, list):
+        for i, v in enumerate(node):
+            yield from _walk(v, f"{key}[{i}]")
+    else:
+        yield key, node
+
+
+def finite_problems(config: dict) -> list[str]:
+    """NaN or infinity anywhere: the schema's ranges let NaN through (every comparison with it is false)."""
+    return [problem(key, value, "must be a finite number")
+            for key, value in _walk(config) if isinstance(value, float) and not math.isfinite(value)]
+
+
+def schema_problems(config: dict, schema_path=SCHEMA) -> list[str]:
+    """The schema's findings, one line each, naming the key (Snakemake's validate then fills defaults)."""
+    import jsonschema
+
+    schema = yaml.safe_load(Path(schema_path).read_text())
+    validator = jsonschema.validators.validator_for(schema)(schema)
+    out = []
+    for error in sorted(validator.iter_errors(config), key=lambda e: list(map(str, e.absolute_path))):
+        key = "".join(f"[{p}]" if isinstance(p, int) else f".{p}" for p in error.absolute_path).lstrip(".")
+        hint = ""
+        if isinstance(error.instance, str) and error.validator == "type":
+            try:
+                float(error.instance)
+                hint = " (YAML reads a number like 1.0e5 as text: write 1.0e+5)"
+            except ValueError:
+                pass
+        out.append(f"config error: {key or '<top level>'}: {error.message}{hint}")
+    return out
+
+
+def _seed_problems(seeds, key) -> list[str]:
+    return [problem(f"{key}[{i}]", s, "must be an integer (write 1, not 1.0)", "0, 1, 2, ...", shown=repr(s))
+            for i, s in enumerate(seeds or []) if isinstance(s, float)]
+
+
+def loading_problems(config: dict) -> list[str]:
+    """Rates within the DEM's range and the quasi-static bound; distinct case labels; integer seeds."""
+    loading, out = config["loading"], []
+    allow = bool(loading.get("allow_inertial", False))
+    i_lo, i_hi = inertial_number_range()
+    out += _seed_problems(config["seeds"], "seeds")
+    out += _seed_problems((config.get("accuracy") or {}).get("seeds"), "accuracy.seeds")
+    for p in loading["pressures"]:
+        for j, I in enumerate(rates(config, p)):
+            if "wall_velocities" in loading:
+                key, value = f"loading.wall_velocities[{j}]", loading["wall_velocities"][j]
+                why = f"gives I = {I:.3g} at p = {format_number(p)} Pa (I = 2U/H d/sqrt(p/rho), H = H_over_d d)"
+            else:
+                key, value, why = f"loading.inertial_numbers[{j}]", I, "I"
+            if not i_lo <= I <= i_hi:
+                out.append(problem(key, value, f"{why} outside the DEM's range",
+                                   f"I in [{i_lo:g}, {i_hi:g}]"))
+            elif I > QUASI_STATIC_MAX_I and not allow:
+                out.append(problem(key, value, f"{why} is above the quasi-static bound I <= {QUASI_STATIC_MAX_I:g} "
+                                   "the model is made for",
+                                   f"I <= {QUASI_STATIC_MAX_I:g}, or set loading.allow_inertial: true"))
+    if out:
+        return out
+    # two values that print alike would make one case (and one folder) of two
+    by_label = {}
+    for p in loading["pressures"]:
+        for I in rates(config, p):
+            by_label.setdefault(case_label(p, I, config["seeds"][0]), []).append((p, I))
+    for label, pairs in by_label.items():
+        if len(pairs) > 1:
+            (p0, I0), (p1, I1) = pairs[:2]
+            key = "loading.pressures" if p0 != p1 else (
+                "loading.wall_velocities" if "wall_velocities" in loading else "loading.inertial_numbers")
+            values = f"{p0!r} and {p1!r}" if p0 != p1 else f"{I0!r} and {I1!r}"
+            out.append(problem(key, None, f"both give the case label {label} (labels keep 6 significant digits), "
+                               "so the two would be one case", "values that differ within 6 significant digits", shown=values))
+    return out
+
+
+def cell_problems(config: dict) -> list[str]:
+    """Sampling intervals in order, a bulk band inside the gap, a width for 3 disks, a packing that can compress."""
+    out = []
+    s, cell, mat, pack = config["sampling"], config["cell"], config["material"], config.get("pack") or {}
+    if s["fine_interval"] > s["coarse_interval"]:
+        out.append(problem("sampling.fine_interval", s["fine_interval"],
+                           f"is above sampling.coarse_interval = {_v(s['coarse_interval'])}",
+                           "fine_interval <= coarse_interval"))
+    out += _bulk_problems(cell["H_over_d"], s.get("bulk_exclusion_d", scene_default("sampling", "bulk_exclusion_d")), "the gap cell.H_over_d")
+    W = cell["W_over_H"] * cell["H_over_d"]
+    if W < 3 * mat["size_ratio_max"]:
+        out.append(problem("cell.W_over_H", cell["W_over_H"],
+                           f"the periodic width {W:g} d cannot hold 3 of the largest disks "
+                           f"({_v(mat['size_ratio_max'])} d)", f"W_over_H >= {3 * mat['size_ratio_max'] / cell['H_over_d']:.3g}"))
+    phi0 = pack.get("initial_solid_fraction", scene_default("pack", "initial_solid_fraction"))
+    phi = pack.get("solid_fraction_guess", scene_default("pack", "solid_fraction_guess"))
+    if phi0 >= phi:
+        out.append(problem("pack.initial_solid_fraction", phi0,
+                           f"must be below pack.solid_fraction_guess = {_v(phi)} (the loose placement is compressed to it)",
+                           f"< {_v(phi)}"))
+    return out
+
+
+def _bulk_problems(H_over_d, bulk, gap):
+    if H_over_d - 2 * bulk < 1:
+        return [problem("sampling.bulk_exclusion_d", bulk,
+                        f"two bands of {_v(bulk)} d leave no bulk in {gap} = {_v(H_over_d)}",
+                        f"bulk_exclusion_d <= {(H_over_d - 1) / 2:g} (H_over_d - 2 bulk_exclusion_d >= 1)")]
+    return []
+
+
+def protocol_problems(config: dict) -> list[str]:
+    """A protocol longer than its transition, and every stage at least one sampling interval long."""
+    out, s = [], config["sampling"]
+    after_reversal = s["fine_interval"] if s["fine_window"] > 0 else s["coarse_interval"]
+    sin = config["protocols"].get("sinusoidal")
+    if sin and sin["transition_strain"] > sin["strain"]:
+        out.append(problem("protocols.sinusoidal.transition_strain", sin["transition_strain"],
+                           f"is longer than protocols.sinusoidal.strain = {_v(sin['strain'])}: "
+                           "the run would stop inside the half cosine",
+                           f"transition_strain <= {_v(sin['strain'])}"))
+    for name, spec in config["protocols"].items():
+        if spec["strain"] < after_reversal:
+            out.append(problem(f"protocols.{name}.strain", spec["strain"],
+                               f"shorter than one sample ({_v(after_reversal)} of strain after the reversal)",
+                               f"strain >= {_v(after_reversal)}"))
+    if config["preshear"]["strain"] < s["coarse_interval"]:
+        out.append(problem("preshear.strain", config["preshear"]["strain"],
+                           f"shorter than one sample (sampling.coarse_interval = {_v(s['coarse_interval'])})",
+                           f"strain >= {_v(s['coarse_interval'])}"))
+    return out
+
+
+def calibrate_min_samples(config: dict, root=ROOT) -> int:
+    """Fewest rows calibrate accepts per DEM file: ``--min-samples`` of calibration.options, else its default.
+
+    The default is read from calibrate/io.py's ``MIN_SAMPLES = ...`` line (importing
+    calibrate costs seconds at every Snakemake start).
+    """
+    import ast
+    import shlex
+
+    argv = shlex.split((config.get("calibration") or {}).get("options", "") or "")
+    for i, arg in enumerate(argv):
+        value = arg.split("=", 1)[1] if arg.startswith("--min-samples=") else (
+            argv[i + 1] if arg == "--min-samples" and i + 1 < len(argv) else None)
+        if value is not None:
+            try:
+                return int(value)
+            except ValueError:
+                return 0  # options_problems names it
+    tree = ast.parse((Path(root) / "calibrate" / "io.py").read_text())
+    for node in tree.body:
+        if isinstance(node, ast.Assign) and any(getattr(t, "id", None) == "MIN_SAMPLES" for t in node.targets):
+            return int(ast.literal_eval(node.value))
+    from calibrate.io import MIN_SAMPLES
+
+    return MIN_SAMPLES
+
+
+def expected_rows(strain: float, fine_strain: float, sampling: dict) -> int:
+    """Rows a stage writes: one per fine_interval over its first ``fine_strain``, one per coarse_interval after.
+
+    yade_scripts/stages.py samples finely over the transition plus ``sampling.fine_window``
+    from the start of every shear stage, then coarsely.
+    """
+    fine = min(strain, fine_strain)
+    return int(fine / sampling["fine_interval"] + max(strain - fine, 0.0) / sampling["coarse_interval"]) + 1
+
+
+def sample_count_problems(config: dict, root=ROOT) -> list[str]:
+    """Every shear stage long enough for the rows calibrate needs per file."""
+    need = calibrate_min_samples(config, root)
+    s, out = config["sampling"], []
+    runs = [("preshear.strain", config["preshear"]["strain"], s["fine_window"])]
+    for name, spec in config["protocols"].items():
+        runs.append((f"protocols.{name}.strain", spec["strain"], spec.get("transition_strain", 0.0) + s["fine_window"]))
+    for key, strain, fine_strain in runs:
+        rows = expected_rows(strain, fine_strain, s)
+        if rows < need:
+            out.append(problem(key, strain, f"gives about {rows} samples with this sampling: calibrate needs "
+                               f"{need} per file (its --min-samples)",
+                               "a longer strain, finer sampling, or --min-samples in calibration.options"))
+    return out
+
+
+def calibration_problems(config: dict) -> list[str]:
+    """Calibration sets that name what the campaign has; a sensitivity set that exists."""
+    out = []
+    table = cases(config)
+    pressures = sorted({c["pressure"] for c in table.values()})
+    inertial = sorted({c["inertial_number"] for c in table.values()})
+    protocols = list(config["protocols"])
+    sets = (config.get("calibration") or {}).get("sets") or {}
+    for name, spec in sets.items():
+        key = f"calibration.sets.{name}"
+        if not SET_NAME.match(str(name)):
+            out.append(problem(key, name, "is not a usable set name (it names a folder and a Snakemake wildcard)",
+                               "letters, digits, '.', '-', single '_' between them"))
+            continue
+        for field, have in (("pressures", pressures), ("inertial_numbers", inertial)):
+            for i, v in enumerate(spec.get(field) or []):
+                if not any(same_value(v, h) for h in have):
+                    out.append(problem(f"{key}.{field}[{i}]", v, "is not in the campaign, so the set would "
+                                       "silently lose it", ", ".join(format_number(h) for h in have)))
+        for i, p in enumerate(spec.get("protocols") or []):
+            if p not in protocols:
+                out.append(problem(f"{key}.protocols[{i}]", p, "is not a protocol of the campaign (protocols:)",
+                                   ", ".join(protocols)))
+    if out:
+        return out
+    built = calibration_sets(config, table)
+    for name in sets:
+        if name not in built:
+            out.append(problem(f"calibration.sets.{name}", name, "selects no case of the campaign"))
+    sensitivity = (config.get("compare") or {}).get("sensitivity_set", "all")
+    if sensitivity not in built:
+        out.append(problem("compare.sensitivity_set", sensitivity, "is not a calibration set",
+                           ", ".join(sorted(built))))
+    return out
+
+
+def _argparse_error(parser, argv) -> str | None:
+    """argparse's own complaint about ``argv`` (its last stderr line), or None when it parses."""
+    import contextlib
+    import io
+
+    err = io.StringIO()
+    try:
+        with contextlib.redirect_stderr(err):
+            parser.parse_args(argv)
+    except SystemExit:
+        lines = err.getvalue().strip().splitlines()
+        return lines[-1].split("error: ", 1)[-1] if lines else "not accepted"
+    return None
+
+
+def options_problems(config: dict) -> list[str]:
+    """Extra command-line options of calibrate and compare, parsed by their own parsers now, not after the DEM."""
+    import shlex
+
+    out = []
+    calibration = (config.get("calibration") or {}).get("options", "")
+    compare = (config.get("compare") or {}).get("options", "")
+    checks = []
+    if calibration.strip():
+        from calibrate.__main__ import parser as calibrate_parser
+
+        checks.append(("calibration.options", calibration, calibrate_parser(), ["--dem", "d", "--out", "o"],
+                       "options of python -m calibrate --help"))
+    if compare.strip():
+        from compare.cli import build_parser
+
+        checks.append(("compare.options", compare, build_parser(),
+                       ["predict", "--dem", "d", "--params", "p", "--out", "o"],
+                       "options of python -m compare predict --help"))
+    for key, value, parser, required, allowed in checks:
+        try:
+            argv = shlex.split(value)
+        except ValueError as exc:
+            out.append(problem(key, value, f"cannot be split into options ({exc})", allowed))
+            continue
+        error = _argparse_error(parser, [*required, *argv])
+        if error:
+            out.append(problem(key, value, error, allowed))
+    return out
+
+
+def results_dir_problems(config: dict, root=ROOT) -> list[str]:
+    """A results folder that is a folder of its own: not empty, not a root, not the code's."""
+    value = config.get("results_dir", "results")
+    key, allowed = "results_dir", "a folder of its own, e.g. results or /scratch/me/results"
+    if not str(value).strip():
+        return [problem(key, value, "is empty", allowed)]
+    if any(ch.isspace() for ch in str(value)):
+        return [problem(key, value, "contains white space (the rules' shell commands do not quote paths)", allowed)]
+    root = Path(root).resolve()
+    path = (root / value).resolve()
+    if path == Path(path.anchor):
+        return [problem(key, value, "is the root of the file system", allowed)]
+    if path == root or path in root.parents:
+        return [problem(key, value, "is the repository or a folder above it: outputs would mix with the code",
+                        allowed)]
+    if root in path.parents and path.relative_to(root).parts[0] in SOURCE_FOLDERS:
+        return [problem(key, value, f"lies in the repository's {path.relative_to(root).parts[0]}/ folder", allowed)]
+    return []
+
+
+def study_problems(config: dict) -> list[str]:
+    """The DEM study's grid (when it runs): dem_study.grid's own checks, bulk band and width per height."""
+    acc = config.get("accuracy") or {}
+    if not acc.get("dem_study", False):
+        return []
+    from dem_study import grid
+
+    try:
+        points = grid.unique_points(grid.expand(acc))
+    except (ValueError, KeyError) as exc:
+        return [f"config error: {str(exc).strip(chr(39))}"]
+    bulk = config["sampling"].get("bulk_exclusion_d", scene_default("sampling", "bulk_exclusion_d"))
+    out = []
+    for H in sorted(set(points["H_over_d"])):
+        out += _bulk_problems(H, bulk, "the DEM study's gap accuracy H_over_d")
+    return out
+
+
+def scene_problems(config: dict, root=ROOT) -> list[str]:
+    """Every scene the campaign (and the DEM study) would write, through the DEM's own validator."""
+    module = _scene_module(root)
+    validate, SceneError = module.validate, module.SceneError
+    scenes = [(label, scene_from_config(config, case, label)) for label, case in cases(config).items()]
+    if (config.get("accuracy") or {}).get("dem_study", False):
+        from dem_study import grid
+
+        scenes += [(point, grid.point_scene(config, point))
+                   for point in grid.unique_points(grid.expand(config["accuracy"]))["point"]]
+    out = []
+    for label, scene in scenes:
+        try:
+            validate(scene)
+        except SceneError as exc:
+            line = f"config error: the scene of {label}: {str(exc).removeprefix('scene error: ')}"
+            if line not in out:
+                out.append(line)
+    return out
+
+
+def check(config: dict, configfiles=(), schema_path=SCHEMA, root=ROOT) -> list[str]:
+    """Every problem of the config, one line each; empty when the campaign may start.
+
+    Parameters
+    ----------
+    config : dict
+        The config as Snakemake holds it (files and ``--config`` merged), before
+        the schema's defaults are filled in.
+    configfiles : list of paths
+        The config files it came from, checked for duplicated keys.
+    """
+    out = configfile_problems(configfiles)
+    if "loading" in config and isinstance(config["loading"], dict):
+        if "inertial_numbers" in config["loading"] and "wall_velocities" in config["loading"]:
+            out.append("config error: loading: give inertial_numbers or wall_velocities, not both")
+    out += finite_problems(config)
+    # (the "not both" line above says what the schema's oneOf says at length)
+    out += [line for line in schema_problems(config, schema_path)
+            if not (out and line.startswith("config error: loading: {") and "is valid under each of" in line)]
+    if out:
+        return out
+    for step in (results_dir_problems, loading_problems, cell_problems, protocol_problems,
+                 calibration_problems, options_problems, study_problems):
+        out += step(config, root) if step is results_dir_problems else step(config)
+    if not out:
+        out += sample_count_problems(config, root)  # (needs intervals in order and valid options)
+    return out or scene_problems(config, root)
+
+
+def stop_on_problems(problems: list[str]) -> None:
+    """Print the problems on stderr and exit with code 2 (bad input), before Snakemake plans any job."""
+    import sys
+
+    if problems:
+        print("\n".join(problems), file=sys.stderr, flush=True)
+        sys.exit(2)
+

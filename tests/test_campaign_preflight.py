@@ -1,0 +1,216 @@
+"""Bad config is stopped before any job, by the schema and campaign/preflight.py, naming the key.
+
+Every case runs the real ``snakemake --dry-run`` on a copy of the CI preset with
+one thing wrong (about 1.5 s each, two at a time); a few run the pre-flight
+function directly. A case passes when Snakemake exits with code 2, plans no job,
+and its message names the key (and, where given, the allowed value).
+"""
+import copy
+import math
+import subprocess
+import sys
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import pytest
+import yaml
+
+from campaign import preflight
+
+ROOT = Path(__file__).resolve().parents[1]
+CI = yaml.safe_load((ROOT / "config" / "ci.yaml").read_text())
+# without extra calibrate options: checking them imports calibrate (seconds), needed only by their own cases
+CI["calibration"]["options"] = ""
+
+
+def edited(**sections):
+    """The CI preset with sections updated (a dict updates the section, anything else replaces it)."""
+    def edit(config):
+        for key, value in sections.items():
+            if isinstance(value, dict) and isinstance(config.get(key), dict):
+                config[key].update(value)
+            else:
+                config[key] = value
+    return edit
+
+
+def replaced(**sections):
+    """The CI preset with whole sections replaced."""
+    def edit(config):
+        config.update(copy.deepcopy(sections))
+    return edit
+
+
+CI_TEXT = (ROOT / "config" / "ci.yaml").read_text()
+
+# name -> (edit of the CI config, or the config file's text; words the message must hold)
+CASES = {
+    "nan_pressure": (edited(loading={"pressures": [math.nan]}), ["loading.pressures[0]", "finite"]),
+    "nan_kappa": (edited(material={"kappa": math.nan}), ["material.kappa", "finite"]),
+    "nan_preshear_strain": (edited(preshear={"strain": math.nan}), ["preshear.strain", "finite"]),
+    "nan_protocol_strain": (edited(protocols={"heaviside": {"strain": math.nan}}),
+                            ["protocols.heaviside.strain", "finite"]),
+    "wall_velocity_gives_I_0.32": (replaced(loading={"pressures": [1e5], "wall_velocities": [10.0]}),
+                                   ["loading.wall_velocities[0]", "I = 0.316", "[1e-05, 0.1]"]),
+    "wall_velocity_above_quasi_static": (replaced(loading={"pressures": [1e5], "wall_velocities": [0.5]}),
+                                         ["loading.wall_velocities[0]", "I = 0.0158", "allow_inertial"]),
+    "inertial_number_above_quasi_static": (replaced(loading={"pressures": [1e5], "inertial_numbers": [0.05]}),
+                                           ["loading.inertial_numbers[0]", "allow_inertial"]),
+    "fine_interval_above_coarse": (edited(sampling={"fine_interval": 0.01, "coarse_interval": 0.005}),
+                                   ["sampling.fine_interval", "coarse_interval"]),
+    "bulk_exclusion_fills_the_gap": (edited(sampling={"bulk_exclusion_d": 5}),
+                                     ["sampling.bulk_exclusion_d", "cell.H_over_d", "<= 4.5"]),
+    "loose_packing_denser_than_guess": (edited(pack={"initial_solid_fraction": 0.7, "solid_fraction_guess": 0.6}),
+                                        ["pack.initial_solid_fraction", "< 0.6"]),
+    "float_seed": (edited(seeds=[1.0]), ["seeds[0]", "integer"]),
+    "pressures_share_a_label": (edited(loading={"pressures": [100000.0, 100000.1]}),
+                                ["loading.pressures", "p100000_I0.01_s1"]),
+    "inertial_numbers_share_a_label": (replaced(loading={"pressures": [1e5], "inertial_numbers": [0.002, 0.0020000001]}),
+                                       ["loading.inertial_numbers", "p100000_I0.002_s1"]),
+    "duplicated_key": (CI_TEXT.replace("  friction: 0.45\n", "  friction: 0.45\n  friction: 0.2\n"),
+                       ["duplicate key 'friction'", "first given on line 14", ".yaml:15"]),
+    "calibration_set_unknown_pressure": (edited(calibration={"sets": {"high": {"pressures": [2e5]}}}),
+                                         ["calibration.sets.high.pressures[0]", "100000"]),
+    "calibration_set_unknown_inertial_number": (
+        edited(calibration={"sets": {"slow": {"inertial_numbers": [1e-3]}}}),
+        ["calibration.sets.slow.inertial_numbers[0]", "0.01"]),
+    "calibration_set_unknown_protocol": (
+        replaced(protocols={"heaviside": {"strain": 0.4}}, calibration={"sets": {"s": {"protocols": ["sinusoidal"]}}}),
+        ["calibration.sets.s.protocols[0]", "heaviside"]),
+    "calibration_set_bad_name": (edited(calibration={"sets": {"a b": {"protocols": ["heaviside"]}}}),
+                                 ["calibration.sets.a b", "letters, digits"]),
+    "unknown_sensitivity_set": (edited(compare={"sensitivity_set": "nope"}),
+                                ["compare.sensitivity_set", "all, heaviside_only"]),
+    "transition_longer_than_protocol": (
+        edited(protocols={"heaviside": {"strain": 0.4}, "sinusoidal": {"strain": 0.4, "transition_strain": 0.5}}),
+        ["protocols.sinusoidal.transition_strain", "<= 0.4"]),
+    "heaviside_shorter_than_a_sample": (edited(protocols={"heaviside": {"strain": 0.001}}),
+                                        ["protocols.heaviside.strain", ">= 0.002"]),
+    "too_few_samples_for_calibrate": (edited(protocols={"heaviside": {"strain": 0.05}}),
+                                      ["protocols.heaviside.strain", "about 26 samples", "needs 50"]),
+    "preshear_shorter_than_a_sample": (edited(preshear={"strain": 0.001}), ["preshear.strain", ">= 0.005"]),
+    "results_dir_root": (edited(results_dir="/"), ["results_dir", "root of the file system"]),
+    "results_dir_empty": (edited(results_dir=""), ["results_dir"]),
+    "results_dir_repository": (edited(results_dir="."), ["results_dir", "repository"]),
+    "results_dir_code_folder": (edited(results_dir="compare"), ["results_dir", "compare/"]),
+    "results_dir_with_space": (edited(results_dir="my results"), ["results_dir", "white space"]),
+    "cell_too_narrow": (edited(cell={"H_over_d": 4, "W_over_H": 1}, sampling={"bulk_exclusion_d": 1}),
+                        ["cell.W_over_H", "3 of the largest disks"]),
+    "number_read_as_text": (CI_TEXT.replace("pressures: [1.0e+5]", "pressures: [1.0e5]"),
+                            ["loading.pressures[0]", "1.0e+5"]),
+    "both_rates": (edited(loading={"pressures": [1e5], "inertial_numbers": [1e-2], "wall_velocities": [0.1]}),
+                   ["loading", "not both"]),
+    "calibration_option_misspelt": (edited(calibration={"options": "--bootstrapp 8"}),
+                                    ["calibration.options", "unrecognized arguments: --bootstrapp"]),
+    "calibration_option_bad_value": (edited(calibration={"options": "--bootstrap eight"}),
+                                     ["calibration.options", "--bootstrap: invalid int value: 'eight'"]),
+    "compare_option_misspelt": (edited(compare={"options": "--zoom-in 0.05"}),
+                                ["compare.options", "unrecognized arguments: --zoom-in"]),
+    "schema_range": (edited(cell={"H_over_d": 1}), ["cell.H_over_d", "minimum of 4"]),
+    "study_subset_outside_grid": (
+        edited(accuracy={"dem_study": True, "base": {"kappa": 1e3, "inertial_number": 1e-2, "H_over_d": 8,
+                                                      "dt_over_tc": 0.1, "fine_interval": 0.002,
+                                                      "coarse_interval": 0.01},
+                         "dem_grid": {"kappa": [1e3, 1e4]}, "default_subset": {"kappa": [3e3]}, "seeds": [1]}),
+        ["accuracy.default_subset.kappa", "3000"]),
+}
+
+
+def config_text(edit):
+    if isinstance(edit, str):
+        return edit
+    config = copy.deepcopy(CI)
+    edit(config)
+    return yaml.safe_dump(config)
+
+
+def dry_run(path):
+    return subprocess.run([sys.executable, "-m", "snakemake", "-n", "--configfile", str(path)],
+                          cwd=ROOT, capture_output=True, text=True, timeout=300)
+
+
+@pytest.fixture(scope="module")
+def dry_runs(tmp_path_factory):
+    """Every case's dry run, two at a time: name -> (config path, CompletedProcess)."""
+    tmp = tmp_path_factory.mktemp("preflight")
+    paths = {}
+    for name, (edit, _) in CASES.items():
+        paths[name] = tmp / f"{name}.yaml"
+        paths[name].write_text(config_text(edit))
+    with ThreadPoolExecutor(max_workers=2) as pool:
+        results = dict(zip(paths, pool.map(dry_run, paths.values())))
+    return {name: (paths[name], results[name]) for name in paths}
+
+
+@pytest.mark.parametrize("name", list(CASES))
+def test_bad_config_stops_before_any_job_naming_the_key(dry_runs, name):
+    path, result = dry_runs[name]
+    message = result.stdout + result.stderr
+    assert result.returncode == 2, message[-2000:]
+    assert "Traceback" not in message and "Building DAG" not in message, message[-2000:]
+    for words in CASES[name][1]:
+        assert words.replace(".yaml:", f"{path.name}:") in message, (words, message[-2000:])
+
+
+@pytest.mark.parametrize("preset", ["config", "quick", "ci"])
+def test_presets_pass_the_preflight(preset):
+    path = ROOT / "config" / f"{preset}.yaml"
+    assert preflight.check(yaml.safe_load(path.read_text()), [path]) == []
+
+
+def test_inertial_run_passes_with_the_override():
+    config = copy.deepcopy(CI)
+    config["loading"] = {"pressures": [1e5], "inertial_numbers": [0.05]}
+    assert any("allow_inertial" in line for line in preflight.check(config))
+    config["loading"]["allow_inertial"] = True
+    assert preflight.check(config) == []
+
+
+def test_short_runs_pass_when_calibrate_is_told_to_take_fewer_samples():
+    config = copy.deepcopy(CI)
+    config["protocols"]["heaviside"]["strain"] = 0.05
+    assert any("protocols.heaviside.strain" in line for line in preflight.check(config))
+    config["calibration"]["options"] = "--min-samples 20"
+    assert preflight.check(config) == []
+
+
+def test_wall_velocity_converts_with_the_nominal_gap():
+    # I = 2U/H d / sqrt(p/rho) with H = 10 d: U = 0.1 m/s at p = 1e5 Pa, rho = 2500 -> I = 0.00316
+    config = copy.deepcopy(CI)
+    config["loading"] = {"pressures": [1e5], "wall_velocities": [0.1]}
+    assert preflight.check(config) == []
+    from campaign.cases import cases
+    assert [c["inertial_number"] for c in cases(config).values()] == pytest.approx([0.02 / 6.3245553] * 3)
+
+
+def test_every_problem_is_listed_not_only_the_first():
+    config = copy.deepcopy(CI)
+    config["sampling"].update(fine_interval=0.01, coarse_interval=0.005)
+    config["pack"].update(initial_solid_fraction=0.7, solid_fraction_guess=0.6)
+    config["compare"] = {"sensitivity_set": "nope"}
+    keys = [line.split(" = ")[0] for line in preflight.check(config)]
+    assert keys == ["config error: sampling.fine_interval", "config error: pack.initial_solid_fraction",
+                    "config error: compare.sensitivity_set"]
+
+
+@pytest.mark.parametrize("text, words", [
+    (None, ["no such file"]),
+    ("campaign: x\nloading: {pressures: [1\n", ["bad.yaml:3", "expected ',' or ']'"]),
+    ("campaign: x\ncampaign: y\n", ["bad.yaml:2", "duplicate key 'campaign'"]),
+    ("- just\n- a list\n", ["must be a mapping"]),
+])
+def test_config_file_that_cannot_be_read_is_named_with_its_line(tmp_path, text, words):
+    path = tmp_path / "bad.yaml"
+    if text is not None:
+        path.write_text(text)
+    result = subprocess.run([sys.executable, "-m", "campaign", "check", str(path)],
+                            cwd=ROOT, capture_output=True, text=True, timeout=60)
+    assert result.returncode == 2
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in result.stderr, result.stderr
+    assert all(w in lines[0] for w in words), lines[0]
+
+
+def test_config_folder_is_named():
+    with pytest.raises(preflight.ConfigProblem, match="is a folder"):
+        preflight.load_configfile(ROOT / "config")

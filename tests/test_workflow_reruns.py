@@ -1,0 +1,109 @@
+"""A config edit reruns the DEM exactly when it changes a DEM result.
+
+A real tiny campaign (two ~40-disk cases, a short pre-shear and Heaviside
+reversal: about 40 s of YADE on one core) is run once through Snakemake; each
+test then edits a copy of its config and asks Snakemake (dry run) what it would
+rerun.
+"""
+import copy
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import yaml
+
+ROOT = Path(__file__).resolve().parents[1]
+SNAKEMAKE = [sys.executable, "-m", "snakemake"]
+DEM_RULES = {"scene", "dem_pack", "dem_preshear", "dem_reversal"}
+
+TINY = {
+    "campaign": "tiny",
+    "loading": {"pressures": [1.0e5], "inertial_numbers": [1.0e-2]},
+    "seeds": [1, 2],
+    "cell": {"H_over_d": 5, "W_over_H": 2},
+    "material": {"diameter": 1.0e-3, "density": 2500.0, "kappa": 1.0e3, "kt_over_kn": 0.5,
+                 "restitution": 0.5, "friction": 0.45, "size_ratio_min": 0.5, "size_ratio_max": 1.5},
+    "timestep": {"dt_over_tc": 0.1},
+    "pack": {"initial_solid_fraction": 0.4, "solid_fraction_guess": 0.8},
+    "preshear": {"strain": 0.2},
+    "protocols": {"heaviside": {"strain": 0.05}},
+    # 126 and 51 rows: calibrate's 50 per file (the pre-flight check asks for them)
+    "sampling": {"fine_interval": 0.001, "fine_window": 0.05, "coarse_interval": 0.002, "bulk_exclusion_d": 1},
+    "run": {"checkpoint_every_s": 60, "progress_every_s": 10},
+    "calibration": {"options": "--bootstrap 8"},
+    "accuracy": {"ode_work_precision": False},
+}
+CASES = ["p100000_I0.01_s1", "p100000_I0.01_s2"]
+
+
+def write(config, path):
+    path.write_text(yaml.safe_dump(config))
+    return path
+
+
+def job_counts(stdout):
+    counts = {}
+    for line in stdout.splitlines():
+        parts = line.split()
+        if len(parts) == 2 and parts[1].isdigit():
+            counts[parts[0]] = int(parts[1])
+    return counts
+
+
+@pytest.fixture(scope="module")
+def finished(tmp_path_factory):
+    """The tiny campaign's DEM, run to the end; returns (config, its folder, DEM targets)."""
+    if shutil.which("yade") is None:
+        pytest.skip("needs YADE (Debian package yade)")
+    tmp = tmp_path_factory.mktemp("reruns")
+    config = copy.deepcopy(TINY)
+    config["results_dir"] = str(tmp / "results")
+    targets = [f"{config['results_dir']}/dem/{case}/heaviside.csv" for case in CASES]
+    result = subprocess.run([*SNAKEMAKE, "-j1", *targets, "--configfile", str(write(config, tmp / "config.yaml"))],
+                            cwd=ROOT, capture_output=True, text=True, timeout=600)
+    assert result.returncode == 0, result.stderr[-3000:]
+    return config, tmp, targets
+
+
+def planned(finished, edit, name, all_targets=False):
+    """Jobs a dry run plans after ``edit(config)``: rule -> count."""
+    config, tmp, targets = finished
+    changed = copy.deepcopy(config)
+    edit(changed)
+    path = write(changed, tmp / f"{name}.yaml")
+    result = subprocess.run([*SNAKEMAKE, "-n", *([] if all_targets else targets), "--configfile", str(path),
+                             "--quiet", "rules"], cwd=ROOT, capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stdout[-2000:] + result.stderr[-2000:]
+    return job_counts(result.stdout)
+
+
+pytestmark = [pytest.mark.yade, pytest.mark.slow]
+
+
+def test_unchanged_config_reruns_nothing(finished):
+    assert planned(finished, lambda c: None, "same") == {}
+
+
+@pytest.mark.parametrize("name, edit", [
+    ("friction", lambda c: c["material"].update(friction=0.2)),
+    ("kappa", lambda c: c["material"].update(kappa=2.0e3)),
+    ("preshear_strain", lambda c: c["preshear"].update(strain=0.25)),
+    ("heaviside_strain", lambda c: c["protocols"]["heaviside"].update(strain=0.06)),
+    ("bulk_exclusion", lambda c: c["sampling"].update(bulk_exclusion_d=1.5)),
+])
+def test_dem_setting_edit_reruns_every_case(finished, name, edit):
+    counts = planned(finished, edit, name)
+    assert {rule: counts.get(rule) for rule in DEM_RULES} == {rule: len(CASES) for rule in DEM_RULES}, counts
+
+
+@pytest.mark.parametrize("name, edit", [
+    ("calibration_options", lambda c: c["calibration"].update(options="--bootstrap 9")),
+    ("compare_options", lambda c: c.update(compare={"options": "--zoom 0.05"})),
+    ("run_intervals", lambda c: c["run"].update(progress_every_s=5)),
+])
+def test_edit_outside_the_dem_reruns_no_dem_job(finished, name, edit):
+    counts = planned(finished, edit, name, all_targets=True)
+    assert "calibrate" in counts  # the dry run does plan the stages after the DEM
+    assert not DEM_RULES & set(counts), counts
