@@ -23,6 +23,50 @@ rule ode_work_precision:
         "{PY} -m model.work_precision --out {RESULTS}/accuracy > {log} 2>&1"
 
 
+rule batched_cost:
+    output:
+        report(
+            f"{RESULTS}/accuracy/batched_cost.csv",
+            caption="../report/batched_cost.rst",
+            category="Accuracy and cost",
+        ),
+    log:
+        f"{RESULTS}/logs/accuracy/batched_cost.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/accuracy/batched_cost.tsv"
+    threads: 1
+    shell:
+        "OMP_NUM_THREADS=1 {PY} -m model.batched_benchmark --out {RESULTS}/accuracy > {log} 2>&1"
+
+
+rule calibration_cost:
+    input:
+        series=lambda wc: [
+            f"{case_dir(label)}/{stage}.csv" for label in CASES for stage in ["preshear", *PROTOCOLS]
+        ],
+    output:
+        table=report(
+            f"{RESULTS}/accuracy/calibration_cost.csv",
+            caption="../report/calibration_cost.rst",
+            category="Accuracy and cost",
+        ),
+        params=f"{RESULTS}/accuracy/calibration_cost_params.csv",
+    params:
+        protocol_sets=" ".join(
+            f"--protocol-set {name}={','.join(spec['protocols'])}"
+            for name, spec in config.get("calibration", {}).get("sets", {}).items()
+            if "protocols" in spec and set(spec) == {"protocols"}
+        ),
+    log:
+        f"{RESULTS}/logs/accuracy/calibration_cost.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/accuracy/calibration_cost.tsv"
+    threads: 1
+    shell:
+        "OMP_NUM_THREADS=1 {PY} -m calibrate.cost_benchmark --results {RESULTS} --out {RESULTS}/accuracy"
+        " {params.protocol_sets} > {log} 2>&1"
+
+
 # --- DEM resolution study ------------------------------------------------------
 # One factor at a time around accuracy.base (dem_study/grid.py): each point is a
 # DEM case under {RESULTS}/accuracy/dem/<point>/, run by the campaign's own YADE
@@ -196,6 +240,10 @@ def accuracy_targets():
     targets = []
     if ACCURACY.get("ode_work_precision", True):
         targets += rules.ode_work_precision.output
+    if ACCURACY.get("batched_cost", True):
+        targets += rules.batched_cost.output
+    if ACCURACY.get("calibration_cost", True):
+        targets += rules.calibration_cost.output
     if DEM_STUDY:
         targets += rules.dem_study.output
     return targets
