@@ -293,7 +293,7 @@ def test_missing_run_is_named(study, tmp_path, capsys):
                "--heaviside-strain", "0.2", "--campaign-I", "0.001"])
     assert rc == 2
     err = capsys.readouterr().err
-    assert err.startswith("dem_study: ") and "Traceback" not in err
+    assert err.startswith("dem_study analyse: error: ") and "Traceback" not in err and err.count("\n") == 1
     point = next(p for p in points["point"] if p in err)                          # names the run ...
     assert "missing" in err and str(tmp_path / point) in err                      # ... and the file it lacks
 
