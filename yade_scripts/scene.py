@@ -77,6 +77,10 @@ SPEC = {
         "rolling_resistance": (_num(0, 1), 0.0),
         "measurements": (dict(kind="bool"), True),
     },
+    "cell": {
+        "kind": (dict(kind="choice", choices=("walls", "periodic")), "walls"),
+        "mass": (_num(0, 1e6, lo_open=True), 1.0),
+    },
     "run": {
         "checkpoint_every_s": (_num(1, 1e5), 600.0),
         "progress_every_s": (_num(0.1, 1e5), 30.0),
@@ -88,7 +92,10 @@ SPEC = {
     },
 }
 # sections that may be left out entirely (all keys have defaults, or only some stages need them)
-OPTIONAL_SECTIONS = {"pack", "effects", "run", "guards", "heaviside", "sinusoidal"}
+OPTIONAL_SECTIONS = {"pack", "effects", "run", "guards", "heaviside", "sinusoidal", "cell"}
+# keys that only one cell kind uses: given explicitly for the other kind, they are an error
+WALL_ONLY = ("pack.compaction_pressure", "pack.ramp_time", "pack.wall_speed_max", "sampling.bulk_exclusion_d")
+PERIODIC_ONLY = ("cell.mass",)
 STAGE_SECTIONS = {"heaviside": "heaviside", "sinusoidal": "sinusoidal"}
 
 
@@ -100,6 +107,10 @@ def _fmt_range(s):
 
 def _check_value(name, spec, v):
     kind = spec["kind"]
+    if kind == "choice":
+        if v not in spec["choices"]:
+            raise SceneError(f"scene error: {name} = {v!r} must be one of {', '.join(spec['choices'])}")
+        return v
     if kind == "bool":
         if not isinstance(v, bool):
             raise SceneError(f"scene error: {name} = {v!r} must be true or false")
@@ -175,6 +186,7 @@ def validate(raw, stage=None):
             else:
                 o[k] = default
         out[sec] = o
+    _check_cell_kind(raw, out["cell"]["kind"])
     # cross-key checks
     m, s = out["material"], out["sampling"]
     if s["coarse_interval"] < s["fine_interval"]:
@@ -190,6 +202,16 @@ def validate(raw, stage=None):
     if out["pack"]["initial_solid_fraction"] >= out["pack"]["solid_fraction_guess"]:
         raise SceneError("scene error: pack.initial_solid_fraction must be below pack.solid_fraction_guess")
     return out
+
+
+def _check_cell_kind(raw, kind):
+    """Reject keys of the other cell kind, naming the key (only keys written in the file count)."""
+    other = WALL_ONLY if kind == "periodic" else PERIODIC_ONLY
+    for name in other:
+        sec, k = name.split(".")
+        if isinstance(raw.get(sec), dict) and k in raw[sec]:
+            owner = "a wall cell" if kind == "periodic" else "a periodic cell"
+            raise SceneError(f"scene error: {name} applies to {owner} only (cell.kind = {kind})")
 
 
 def load(path, stage=None):
