@@ -205,7 +205,7 @@ class Shear:
         if a.servo in ("first", "inertial"):
             extra.append(PyRunner(command="_servo()", iterPeriod=a.every, label="servo"))
         else:
-            Ly = float(O.cell.size[1])
+            Ly = float(O.cell.hSize[1, 1])
             extra.append(PeriTriaxController(
                 dynCell=True, goal=Vector3(0, -P * D / LZ, 0), stressMask=0b010,
                 maxStrainRate=Vector3(0, 1.0 / T0, 0), mass=self.M * Ly / (self.W * LZ), growDamping=a.damp,
@@ -221,7 +221,7 @@ class Shear:
         a = self.a
         s = stress2d()
         syy = -s[1, 1]
-        Ly = float(O.cell.size[1])
+        Ly = float(O.cell.hSize[1, 1])  # not O.cell.size[1], the length of the sheared column
         if a.servo == "first":
             vgyy = a.gain * (syy - P) / P / T0
         else:
@@ -236,7 +236,7 @@ class Shear:
         axx = float(F[0, 0]) - 0.5
         axy = 0.5 * (float(F[0, 1]) + float(F[1, 0]))
         nint = np.asarray(yu.numIntrsOfEachBody(), dtype=float)
-        Ly = float(O.cell.size[1])
+        Ly = float(O.cell.hSize[1, 1])  # O.cell.size[1] is the sheared column's length: phi 4 % low
         vg = O.cell.velGrad
         self.rows.append(dict(strain=self.strain, s_xy=float(s[0, 1] + s[1, 0]) / 2 / P, s_yy=-s[1, 1] / P,
                               s_xx=-s[0, 0] / P, A_xx=axx, A_xy=axy, phi=self.area / (self.W * Ly),
