@@ -37,6 +37,7 @@ SPEC = {
         "friction": (_num(0, 2), REQUIRED),
         "size_ratio_min": (_num(0, 1, lo_open=True), REQUIRED),
         "size_ratio_max": (_num(1, 3), REQUIRED),
+        "contact_law": (dict(kind="choice", choices=("viscel", "frictvisco")), None),
     },
     "loading": {
         "inertial_number": (_num(1e-5, 0.1), REQUIRED),
@@ -94,7 +95,7 @@ SPEC = {
 # sections that may be left out entirely (all keys have defaults, or only some stages need them)
 OPTIONAL_SECTIONS = {"pack", "effects", "run", "guards", "heaviside", "sinusoidal", "cell"}
 # keys that only one cell kind uses: given explicitly for the other kind, they are an error
-WALL_ONLY = ("pack.compaction_pressure", "pack.ramp_time", "pack.wall_speed_max", "sampling.bulk_exclusion_d")
+WALL_ONLY = ("sampling.bulk_exclusion_d",)
 PERIODIC_ONLY = ("cell.mass",)
 STAGE_SECTIONS = {"heaviside": "heaviside", "sinusoidal": "sinusoidal"}
 
@@ -187,6 +188,7 @@ def validate(raw, stage=None):
                 o[k] = default
         out[sec] = o
     _check_cell_kind(raw, out["cell"]["kind"])
+    _check_contact_law(out)
     # cross-key checks
     m, s = out["material"], out["sampling"]
     if s["coarse_interval"] < s["fine_interval"]:
@@ -212,6 +214,18 @@ def _check_cell_kind(raw, kind):
         if isinstance(raw.get(sec), dict) and k in raw[sec]:
             owner = "a wall cell" if kind == "periodic" else "a periodic cell"
             raise SceneError(f"scene error: {name} applies to {owner} only (cell.kind = {kind})")
+
+
+def _check_contact_law(out):
+    """Default viscel for a wall cell, frictvisco for a periodic cell; viscel is refused in a periodic cell."""
+    m, kind = out["material"], out["cell"]["kind"]
+    if m["contact_law"] is None:
+        m["contact_law"] = "frictvisco" if kind == "periodic" else "viscel"
+    if kind == "periodic" and m["contact_law"] == "viscel":
+        raise SceneError(
+            "scene error: material.contact_law = 'viscel' cannot be used with cell.kind = periodic: YADE's "
+            "Law2_ScGeom_ViscElPhys_Basic adds the periodic image's velocity with the wrong sign, so every "
+            "contact across the sheared boundary slides (use frictvisco)")
 
 
 def load(path, stage=None):
@@ -245,6 +259,8 @@ def derived(scene):
     smin, smax = m["size_ratio_min"], m["size_ratio_max"]
     D2 = d**2 * (smin**2 + smin * smax + smax**2) / 3  # <D^2> for D uniform
     n_wall = max(3, int(math.floor(W / d + 1e-9)))
-    N = int(round(scene["pack"]["solid_fraction_guess"] * W * (H - d) / (math.pi * D2 / 4)))
+    # grains fill the gap between the walls' centre lines less d, or the whole periodic cell
+    H_grains = H if scene.get("cell", {}).get("kind") == "periodic" else H - d
+    N = int(round(scene["pack"]["solid_fraction_guess"] * W * H_grains / (math.pi * D2 / 4)))
     return dict(d=d, rho=rho, p=p, H=H, W=W, kn=kn, kt=kn * m["kt_over_kn"], m_d=m_d, tc=tc, dt=dt,
                 T0=T0, V0=V0, gammadot=gd, U=U, N=N, n_wall=n_wall)
