@@ -115,9 +115,8 @@ def test_restitution_at_the_chosen_time_step(tmp_path):
 
 def _periodic(**cell):
     sc = copy.deepcopy(TINY)
-    for k in ("compaction_pressure", "ramp_time", "wall_speed_max"):
-        sc["pack"].pop(k, None)
     sc["sampling"].pop("bulk_exclusion_d")
+    sc["geometry"] = {"H_over_d": 16, "W_over_H": 1}
     sc["cell"] = dict(kind="periodic", **cell)
     return sc
 
@@ -128,12 +127,11 @@ def test_a_periodic_scene_without_wall_keys_is_valid():
     assert scenemod.validate(TINY)["cell"]["kind"] == "walls"  # the default
 
 
-@pytest.mark.parametrize("key", ["pack.compaction_pressure", "pack.ramp_time", "pack.wall_speed_max",
-                                 "sampling.bulk_exclusion_d"])
+@pytest.mark.parametrize("key", ["sampling.bulk_exclusion_d"])
 def test_a_periodic_scene_rejects_wall_only_keys_naming_them(key):
     sc = _periodic()
     sec, k = key.split(".")
-    sc[sec][k] = 0.5
+    sc[sec][k] = 2.0
     with pytest.raises(scenemod.SceneError, match=rf"{key} applies to a wall cell only"):
         scenemod.validate(sc)
 
@@ -149,4 +147,11 @@ def test_an_unknown_cell_kind_is_named():
     sc = copy.deepcopy(TINY)
     sc["cell"] = {"kind": "box"}
     with pytest.raises(scenemod.SceneError, match=r"cell.kind = 'box' must be one of walls, periodic"):
+        scenemod.validate(sc)
+
+
+def test_a_periodic_scene_must_be_about_square():
+    sc = _periodic()
+    sc["geometry"]["W_over_H"] = 4
+    with pytest.raises(scenemod.SceneError, match=r"geometry.W_over_H = 4 is out of range \[0.5, 1.1\]"):
         scenemod.validate(sc)

@@ -283,6 +283,12 @@ def flip_cell():
         return
     before = float(h[0, 1])
     O.cell.flipCell()
+    h = O.cell.hSize
+    if abs(float(h[1, 0])) > 1e-12 * float(h[0, 0]) or float(h[1, 1]) <= 0:
+        # flipCell also reduces the first column against the second when W > 1.15 L_y
+        print(f"flipCell mixed the cell's axes (hSize = {h}): the periodic cell needs W <= 1.1 H", flush=True)
+        O.pause()
+        return
     lay = json.loads(O.tags["ys_layout"])
     lay["x_shift"] = lay.get("x_shift", 0.0) + before - float(O.cell.hSize[0, 1])
     O.tags["ys_layout"] = json.dumps(lay)

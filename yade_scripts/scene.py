@@ -199,6 +199,11 @@ def validate(raw, stage=None):
             f"scene error: sampling.bulk_exclusion_d = {s['bulk_exclusion_d']:g} leaves no bulk band "
             f"(needs H_over_d - 2*bulk_exclusion_d >= 1, H_over_d = {H:g})")
     W = out["geometry"]["W_over_H"] * H
+    if out["cell"]["kind"] == "periodic" and out["geometry"]["W_over_H"] > 1.1:
+        # YADE's flipCell keeps a sheared cell Lees-Edwards (only the top edge shifts by W) only if
+        # W <= 1.15 L_y; a wider cell gets its axes mixed at the first flip
+        raise SceneError(f"scene error: geometry.W_over_H = {out['geometry']['W_over_H']:g} is out of range "
+                         f"[0.5, 1.1] for cell.kind = periodic (the sheared cell is flipped by whole periods)")
     if W < 3 * m["size_ratio_max"]:
         raise SceneError("scene error: geometry.W_over_H too small: the periodic width must hold 3 of the largest disks")
     if out["pack"]["initial_solid_fraction"] >= out["pack"]["solid_fraction_guess"]:
