@@ -155,3 +155,12 @@ def test_a_periodic_scene_must_be_about_square():
     sc["geometry"]["W_over_H"] = 4
     with pytest.raises(scenemod.SceneError, match=r"geometry.W_over_H = 4 is out of range \[0.5, 1.1\]"):
         scenemod.validate(sc)
+
+
+def test_a_periodic_scene_refuses_the_viscel_contact_law_and_defaults_to_frictvisco():
+    assert scenemod.validate(_periodic())["material"]["contact_law"] == "frictvisco"
+    assert scenemod.validate(TINY)["material"]["contact_law"] == "viscel"
+    sc = _periodic()
+    sc["material"]["contact_law"] = "viscel"
+    with pytest.raises(scenemod.SceneError, match=r"material.contact_law = 'viscel' cannot be used with cell.kind"):
+        scenemod.validate(sc)

@@ -29,10 +29,12 @@ Height control (--servo):
   steps; M = the wall cell's top-wall mass (W/d disks of diameter d) * --mass.
 - ptc:      PeriTriaxController(dynCell=True) on yy only, with the same M
   (its "mass" is M L_y / (W L_z) in its own units), growDamping --damp.
-sigma is the Love-Weber stress over the cell from utils.getStress (negative
-in compression in YADE), times L_z / d to give the 2D stress of disks of
-thickness d. Here: s = -getStress * L_z / d (compression positive),
-tau = s_xy's tension-positive value = getStress_xy * ... see `stress2d`.
+sigma is the Love-Weber stress over the cell from utils.getStress, which is
+tension positive (negative in compression), times L_z / d to give the 2D stress of
+disks of thickness d: s_yy = -sigma_yy is the compressive normal stress, and the
+tension-positive sigma_xy is > 0 for a positive shear rate; mu = |sigma_xy| / s_yy.
+Fabric: A = F - I/2 from utils.fabricTensor over all contacts, |A| = sqrt(2 (A_xx^2 +
+A_xy^2)), theta_A = atan2(A_xy, A_xx) / 2 mod 180 deg, as measure.py and the tests.
 """
 import argparse
 import json
@@ -103,7 +105,7 @@ def engines(law, extra):
 
 
 def stress2d():
-    """2D stress (Pa, thickness d), tension positive: -(-getStress) ... i.e. getStress * L_z / d.
+    """2D stress (Pa, thickness d), tension positive: getStress * L_z / d.
 
     YADE's getStress is sum f l / V with V = L_x L_y L_z, negative in compression.
     """
