@@ -1,7 +1,7 @@
 """The periodic bulk cell (cell.kind = periodic) with real YADE, on a tiny soft cell.
 
 The cell: W = H = 16 d (about 240 disks, periodic in x and y), kappa = 1e3, I = 1e-2.
-One module fixture runs pack -> preshear -> heaviside once.
+One module fixture runs pack -> preshear -> heaviside, sinusoidal once.
 """
 import json
 import os
@@ -25,6 +25,7 @@ def make_scene():
     sc["pack"].update(initial_solid_fraction=0.45, ke_max=1e-6, ramp_time=10)
     sc["preshear"]["strain"] = 1.2
     sc["heaviside"]["strain"] = 0.4
+    sc["sinusoidal"].update(strain=0.3, transition_strain=0.1)
     sc["run"].update(checkpoint_every_s=1000, progress_every_s=5)
     return sc
 
@@ -45,7 +46,7 @@ def case(tmp_path_factory):
     scene = root / "scene.json"
     scene.write_text(json.dumps(make_scene()))
     cdir = root / "case"
-    for stage in ("pack", "preshear", "heaviside"):
+    for stage in ("pack", "preshear", "heaviside", "sinusoidal"):
         r = yade(RUN, scene, stage, cdir)
         assert r.returncode == 0, f"{stage}: {r.stdout[-2000:]}\n{r.stderr[-2000:]}"
     return dict(dir=cdir, scene=scene, root=root)
@@ -78,6 +79,17 @@ def test_reversal_flips_the_sign_of_the_shear_rate(case):
     assert np.all(np.diff(rev["strain"]) < 0)  # the strain falls after the reversal
     assert np.mean(rev["sigma_xy"][rev["strain"] < rev["strain"][0] - 0.2]) < 0  # and so does the stress
     assert np.allclose(rev["U_top"], -rev["U_bottom"]) and np.all(rev["U_top"] < 0)
+
+
+def test_sinusoidal_shear_rate_follows_half_cosine(case):
+    r = read(case["dir"] / "sinusoidal.csv")
+    sc = make_scene()
+    I = sc["loading"]["inertial_number"]  # the nominal rate, in 1/(d sqrt(rho/p))
+    T = sc["sinusoidal"]["transition_strain"] / I
+    tau = r["t"] - json.loads((case["dir"] / "sinusoidal.json").read_text())["reversal_t"]
+    expect = np.where(tau < T, I * np.cos(np.pi * np.clip(tau / T, 0, 1)), -I)
+    assert np.allclose(r["gammadot"], expect, atol=I * 0.02)
+    assert np.allclose(r["U_bottom"], -r["U_top"])
 
 
 def test_strain_accumulates_as_the_integral_of_the_shear_rate(case):
