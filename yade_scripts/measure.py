@@ -42,9 +42,6 @@ class Bulk:
         self.area = math.pi * r**2  # disk areas
         self.vol3 = 4.0 / 3.0 * math.pi * r**3  # bodyStressTensors divides by the sphere volume
 
-    def ys(self):
-        return np.asarray(yu.coordsAndDisplacements(1)[0][: self.N])
-
     def band(self, y_bot, y_top, excl):
         return y_bot + excl, y_top - excl
 
@@ -78,6 +75,10 @@ class Bulk:
         a_xy = 0.5 * (float(F[0, 1]) + float(F[1, 0]))
         return dict(A_xx=a_xx, A_xy=a_xy, n_contacts=n_contacts, sigma_xy_bulk=s[2],
                     p_bulk=-(s[0] + s[1]) / 2, phi=phi, Z=Z, ys=ys)
+
+    def ys(self):
+        """Disk heights (unwrapped: the wall cell is not periodic in y)."""
+        return np.asarray(yu.coordsAndDisplacements(1)[0][: self.N])
 
 
 def max_overlap_d(d, smax):
