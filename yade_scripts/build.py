@@ -14,8 +14,7 @@ import math
 import random
 
 from yade import utils
-from yade.minieigenHP import Vector3
-from yade.minieigenHP import Matrix3
+from yade.minieigenHP import Matrix3, Vector3
 from yade.wrapper import FrictViscoMat, Omega, ViscElMat
 
 O = Omega()
