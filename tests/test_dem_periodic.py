@@ -90,6 +90,8 @@ def test_sinusoidal_shear_rate_follows_half_cosine(case):
     expect = np.where(tau < T, I * np.cos(np.pi * np.clip(tau / T, 0, 1)), -I)
     assert np.allclose(r["gammadot"], expect, atol=I * 0.02)
     assert np.allclose(r["U_bottom"], -r["U_top"])
+    # the per-step shear rate must not freeze the cell's height control (it did: p fell to 0.15)
+    assert abs(r["p"][tau < T].mean() - 1) < 0.05 and abs(r["p"].mean() - 1) < 0.02
 
 
 def test_strain_accumulates_as_the_integral_of_the_shear_rate(case):

@@ -246,16 +246,30 @@ def new_periodic_cell(scene, der):
         grains.append(O.bodies.append(b))
     assert grains == list(range(N)), "grains must have ids 0..N-1"
     lay = dict(kind="periodic", N=N, grains=[0, N], n_wall=0, d=d, W=W, H=H, area=sum(math.pi * D * D / 4 for D in diam),
-               M=scene["cell"]["mass"] * (W / d) * der["m_d"], x_shift=0.0)
+               x_shift=0.0)
     O.tags["ys_layout"] = json.dumps(lay)
     set_cell_load(lay, scene["pack"]["compaction_pressure"] * der["p"] * W * d)
     return lay
 
 
 def set_shear_rate(gammadot):
-    """Impose d v_x / d y = gammadot, keeping the cell's other velocity gradient components."""
+    """Impose d v_x / d y = gammadot, keeping the cell's other velocity gradient components.
+
+    Called every step (the sinusoidal transition, PyRunner labelled 'wallspeed' after
+    NewtonIntegrator), a Python write of velGrad replaces the whole tensor at the next
+    NewtonIntegrator, so the PeriTriaxController's update of velGrad_yy in that step is lost:
+    it is redone here with the controller's own law,
+    velGrad_yy += dt (goal_yy - sigma_yy) / m_c, limited to its maxStrainRate.
+    """
     L = O.cell.velGrad
-    O.cell.velGrad = Matrix3(L[0, 0], gammadot, L[0, 2], L[1, 0], L[1, 1], L[1, 2], L[2, 0], L[2, 1], L[2, 2])
+    vyy = float(L[1, 1])
+    ctl = [e for e in O.engines if e.label == CELL_CONTROLLER]
+    if ctl and any(e.label == "wallspeed" for e in O.engines):
+        c = ctl[0]
+        vyy += O.dt * (float(c.goal[1]) - float(utils.getStress()[1, 1])) / c.mass
+        cap = float(c.maxStrainRate[1])
+        vyy = max(-cap, min(cap, vyy))
+    O.cell.velGrad = Matrix3(L[0, 0], gammadot, L[0, 2], L[1, 0], vyy, L[1, 2], L[2, 0], L[2, 1], L[2, 2])
 
 
 CELL_CONTROLLER = "cellctl"

@@ -70,9 +70,11 @@ def cell_controller(scene):
     h = O.cell.hSize
     Ly, Lz = float(h[1, 1]), float(h[2, 2])
     load = float(O.tags["ys_cell_load"])  # set by build.set_cell_load before the engines are built
+    # from this stage's scene (the layout's M is the pack stage's)
+    M = scene["cell"]["mass"] * (lay["W"] / lay["d"]) * m["density"] * math.pi * lay["d"] ** 3 / 4
     return PeriTriaxController(
         dynCell=True, stressMask=0b010, goal=Vector3(0, cellbuild.cell_goal(lay, load), 0),
-        maxStrainRate=Vector3(0, 1.0 / T0, 0), mass=lay["M"] * Ly / (lay["W"] * Lz), growDamping=0.0,
+        maxStrainRate=Vector3(0, 1.0 / T0, 0), mass=M * Ly / (lay["W"] * Lz), growDamping=0.0,
         globUpdate=1, relStressTol=1e9, absStressTol=1e99, maxUnbalanced=-1, label=cellbuild.CELL_CONTROLLER)
 
 
