@@ -111,3 +111,56 @@ def test_restitution_at_the_chosen_time_step(tmp_path):
     e = {(p["D1"], p["D2"]): p["e"] for p in res["pairs"]}
     assert abs(e[(1.0, 1.0)] - 0.5) < 0.03, e
     assert all(0.42 < v < 0.55 for v in e.values()), e  # smaller pairs see a relatively coarser step
+
+
+def _periodic(**cell):
+    sc = copy.deepcopy(TINY)
+    sc["sampling"].pop("bulk_exclusion_d")
+    sc["geometry"] = {"H_over_d": 16, "W_over_H": 1}
+    sc["cell"] = dict(kind="periodic", **cell)
+    return sc
+
+
+def test_a_periodic_scene_without_wall_keys_is_valid():
+    sc = scenemod.validate(_periodic(mass=0.5), "preshear")
+    assert sc["cell"] == {"kind": "periodic", "mass": 0.5}
+    assert scenemod.validate(TINY)["cell"]["kind"] == "walls"  # the default
+
+
+@pytest.mark.parametrize("key", ["sampling.bulk_exclusion_d"])
+def test_a_periodic_scene_rejects_wall_only_keys_naming_them(key):
+    sc = _periodic()
+    sec, k = key.split(".")
+    sc[sec][k] = 2.0
+    with pytest.raises(scenemod.SceneError, match=rf"{key} applies to a wall cell only"):
+        scenemod.validate(sc)
+
+
+def test_a_wall_scene_rejects_periodic_only_keys_naming_them():
+    sc = copy.deepcopy(TINY)
+    sc["cell"] = {"mass": 0.5}
+    with pytest.raises(scenemod.SceneError, match=r"cell.mass applies to a periodic cell only"):
+        scenemod.validate(sc)
+
+
+def test_an_unknown_cell_kind_is_named():
+    sc = copy.deepcopy(TINY)
+    sc["cell"] = {"kind": "box"}
+    with pytest.raises(scenemod.SceneError, match=r"cell.kind = 'box' must be one of walls, periodic"):
+        scenemod.validate(sc)
+
+
+def test_a_periodic_scene_must_be_about_square():
+    sc = _periodic()
+    sc["geometry"]["W_over_H"] = 4
+    with pytest.raises(scenemod.SceneError, match=r"geometry.W_over_H = 4 is out of range \[0.5, 1.1\]"):
+        scenemod.validate(sc)
+
+
+def test_a_periodic_scene_refuses_the_viscel_contact_law_and_defaults_to_frictvisco():
+    assert scenemod.validate(_periodic())["material"]["contact_law"] == "frictvisco"
+    assert scenemod.validate(TINY)["material"]["contact_law"] == "viscel"
+    sc = _periodic()
+    sc["material"]["contact_law"] = "viscel"
+    with pytest.raises(scenemod.SceneError, match=r"material.contact_law = 'viscel' cannot be used with cell.kind"):
+        scenemod.validate(sc)

@@ -14,8 +14,8 @@ import math
 import random
 
 from yade import utils
-from yade.minieigenHP import Vector3
-from yade.wrapper import Omega, ViscElMat
+from yade.minieigenHP import Matrix3, Vector3
+from yade.wrapper import FrictViscoMat, Omega, ViscElMat
 
 O = Omega()
 
@@ -33,6 +33,8 @@ def contact_material(scene, radius):
     """
     m, d = scene["material"], scene["material"]["diameter"]
     kn = m["kappa"] * m["pressure"] * d
+    if m["contact_law"] == "frictvisco":
+        return frictvisco_material(scene, radius)
     mat = ViscElMat(
         young=kn / radius, poisson=m["kt_over_kn"], en=m["restitution"], et=m["restitution"],
         frictionAngle=math.atan(m["friction"]), density=m["density"])
@@ -41,6 +43,25 @@ def contact_material(scene, radius):
         mat.mR = rr
         mat.mRtype = 1
     return O.materials.append(mat)
+
+
+def frictvisco_material(scene, radius):
+    """FrictViscoMat for a disk of this radius: the same kn, kt and Coulomb friction as ViscElMat.
+
+    Ip2_FrictViscoMat gives kn = E_1 R_1 E_2 R_2 / (E_1 R_1 + E_2 R_2) * 2 = kn with E = kn/R,
+    kt = poisson kn, and a normal dashpot c_n = beta 2 sqrt(m_eff kn) with
+    beta = -ln e / sqrt(pi^2 + ln^2 e), the restitution e of a linear spring-dashpot.
+    Unlike ViscEl: no tangential dashpot, and the normal force is not clamped at zero.
+    """
+    m, d = scene["material"], scene["material"]["diameter"]
+    kn = m["kappa"] * m["pressure"] * d
+    e = m["restitution"]
+    beta = -math.log(e) / math.sqrt(math.pi**2 + math.log(e) ** 2)
+    if scene["effects"]["rolling_resistance"] > 0:
+        raise ValueError("effects.rolling_resistance needs material.contact_law = viscel")
+    return O.materials.append(FrictViscoMat(
+        young=kn / radius, poisson=m["kt_over_kn"], betan=beta, frictionAngle=math.atan(m["friction"]),
+        density=m["density"]))
 
 
 def set_disk(body, radius, rho, depth):
@@ -93,6 +114,8 @@ def loose_placement(rnd, diameters, W, y_lo, y_hi):
 
 def new_cell(scene, der):
     """Create the loose cell of the pack stage. Returns the layout dict."""
+    if scene["cell"]["kind"] == "periodic":
+        return new_periodic_cell(scene, der)
     O.reset()
     d, rho, W, H = der["d"], der["rho"], der["W"], der["H"]
     m, pk = scene["material"], scene["pack"]
@@ -146,11 +169,139 @@ def layout():
 
 def set_wall_load(lay, force):
     """Permanent force on the top clump (not saved with the state: set after every load)."""
+    if lay.get("kind") == "periodic":
+        set_cell_load(lay, force)
+        return
     O.forces.setPermF(lay["clump"], Vector3(0, -force, 0))
 
 
 def set_wall_speeds(lay, u_top, u_bottom):
+    if lay.get("kind") == "periodic":  # the same nominal shear rate: (u_top - u_bottom) / H
+        set_shear_rate((u_top - u_bottom) / lay["H"])
+        return
     cl = O.bodies[lay["clump"]].state
     cl.vel = Vector3(u_top, cl.vel[1], 0)
     for i in lay["bottom"]:
         O.bodies[i].state.vel = Vector3(u_bottom, 0, 0)
+
+
+def periodic_placement(rnd, diameters, W, Hc):
+    """Random sequential placement of non-overlapping disks in a W x Hc box periodic in x and y."""
+    cell = max(diameters)
+    nx, ny = max(1, int(W // cell)), max(1, int(Hc // cell))
+    cw, ch = W / nx, Hc / ny
+    grid, pos = {}, [None] * len(diameters)
+    for i in sorted(range(len(diameters)), key=lambda k: -diameters[k]):
+        r = diameters[i] / 2
+        for _ in range(20000):
+            x, y = rnd.uniform(0, W), rnd.uniform(0, Hc)
+            ix, iy = int(x // cw) % nx, int(y // ch) % ny
+            ok = True
+            for jx in (ix - 1, ix, ix + 1):
+                for jy in (iy - 1, iy, iy + 1):
+                    for j in grid.get((jx % nx, jy % ny), ()):
+                        dx, dy = x - pos[j][0], y - pos[j][1]
+                        dx -= W * round(dx / W)
+                        dy -= Hc * round(dy / Hc)
+                        if dx * dx + dy * dy < (r + diameters[j] / 2) ** 2:
+                            ok = False
+                            break
+                    if not ok:
+                        break
+                if not ok:
+                    break
+            if ok:
+                grid.setdefault((ix, iy), []).append(i)
+                pos[i] = (x, y)
+                break
+        else:
+            raise PlacementError("loose placement failed: lower pack.initial_solid_fraction")
+    return pos
+
+
+def new_periodic_cell(scene, der):
+    """Create the loose periodic cell of the pack stage (cell.kind = periodic). Returns the layout dict.
+
+    A box periodic in x and y, width W, height H0 = H guess/initial (the packed height is then
+    close to H); z size 4 d size_ratio_max so that the collider accepts the largest disk.
+    No walls: the layout has kind 'periodic' and the cell mass M = cell.mass * (W/d) m_d (the
+    wall cell's top-wall mass).
+    """
+    O.reset()
+    d, rho, W, H = der["d"], der["rho"], der["W"], der["H"]
+    m, pk = scene["material"], scene["pack"]
+    rnd = random.Random(scene["seed"])
+    N = der["N"]
+    diam = [d * rnd.uniform(m["size_ratio_min"], m["size_ratio_max"]) for _ in range(N)]
+    H0 = H * pk["solid_fraction_guess"] / pk["initial_solid_fraction"]
+    O.periodic = True
+    O.cell.setBox(W, H0, 4 * d * m["size_ratio_max"])
+    O.cell.homoDeform = 2  # Lees-Edwards: particle velocities follow changes of velGrad
+    pos = periodic_placement(rnd, diam, W, H0)
+    grains = []
+    for (x, y), D in zip(pos, diam):
+        b = utils.sphere(Vector3(x, y, 0), D / 2, material=contact_material(scene, D / 2))
+        set_disk(b, D / 2, rho, d)
+        b.state.blockedDOFs = "zXY"
+        grains.append(O.bodies.append(b))
+    assert grains == list(range(N)), "grains must have ids 0..N-1"
+    lay = dict(kind="periodic", N=N, grains=[0, N], n_wall=0, d=d, W=W, H=H, area=sum(math.pi * D * D / 4 for D in diam),
+               x_shift=0.0)
+    O.tags["ys_layout"] = json.dumps(lay)
+    set_cell_load(lay, scene["pack"]["compaction_pressure"] * der["p"] * W * d)
+    return lay
+
+
+def set_shear_rate(gammadot):
+    """Impose d v_x / d y = gammadot, keeping the cell's other velocity gradient components.
+
+    Called every step (the sinusoidal transition, PyRunner labelled 'wallspeed' after
+    NewtonIntegrator), a Python write of velGrad replaces the whole tensor at the next
+    NewtonIntegrator, so the PeriTriaxController's update of velGrad_yy in that step is lost:
+    it is redone here with the controller's own law,
+    velGrad_yy += dt (goal_yy - sigma_yy) / m_c, limited to its maxStrainRate.
+    """
+    L = O.cell.velGrad
+    vyy = float(L[1, 1])
+    ctl = [e for e in O.engines if e.label == CELL_CONTROLLER]
+    if ctl and any(e.label == "wallspeed" for e in O.engines):
+        c = ctl[0]
+        vyy += O.dt * (float(c.goal[1]) - float(utils.getStress()[1, 1])) / c.mass
+        cap = float(c.maxStrainRate[1])
+        vyy = max(-cap, min(cap, vyy))
+    O.cell.velGrad = Matrix3(L[0, 0], gammadot, L[0, 2], L[1, 0], vyy, L[1, 2], L[2, 0], L[2, 1], L[2, 2])
+
+
+CELL_CONTROLLER = "cellctl"
+
+
+def cell_goal(lay, force):
+    """PeriTriaxController's goal sigma_yy (3D, YADE's sign) for a load `force` = sigma_yy W d."""
+    return -force / (lay["W"] * float(O.cell.hSize[2, 2]))
+
+
+def set_cell_load(lay, force):
+    """The load of the periodic cell's controller (kept in O.tags so that engines built later find it)."""
+    O.tags["ys_cell_load"] = repr(float(force))
+    for e in O.engines:
+        if e.label == CELL_CONTROLLER:
+            e.goal = Vector3(0, cell_goal(lay, force), 0)
+
+
+def flip_cell():
+    """Keep the sheared cell's skew within half a period: flip by whole periods (the same
+    Lees-Edwards images) and add the removed shear displacement to layout x_shift."""
+    h = O.cell.hSize
+    if abs(float(h[0, 1])) <= 0.5 * float(h[0, 0]):
+        return
+    before = float(h[0, 1])
+    O.cell.flipCell()
+    h = O.cell.hSize
+    if abs(float(h[1, 0])) > 1e-12 * float(h[0, 0]) or float(h[1, 1]) <= 0:
+        # flipCell also reduces the first column against the second when W > 1.15 L_y
+        print(f"flipCell mixed the cell's axes (hSize = {h}): the periodic cell needs W <= 1.1 H", flush=True)
+        O.pause()
+        return
+    lay = json.loads(O.tags["ys_layout"])
+    lay["x_shift"] = lay.get("x_shift", 0.0) + before - float(O.cell.hSize[0, 1])
+    O.tags["ys_layout"] = json.dumps(lay)

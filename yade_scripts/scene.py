@@ -37,6 +37,7 @@ SPEC = {
         "friction": (_num(0, 2), REQUIRED),
         "size_ratio_min": (_num(0, 1, lo_open=True), REQUIRED),
         "size_ratio_max": (_num(1, 3), REQUIRED),
+        "contact_law": (dict(kind="choice", choices=("viscel", "frictvisco")), None),
     },
     "loading": {
         "inertial_number": (_num(1e-5, 0.1), REQUIRED),
@@ -77,6 +78,10 @@ SPEC = {
         "rolling_resistance": (_num(0, 1), 0.0),
         "measurements": (dict(kind="bool"), True),
     },
+    "cell": {
+        "kind": (dict(kind="choice", choices=("walls", "periodic")), "walls"),
+        "mass": (_num(0, 1, lo_open=True), 1.0),  # 10 was measured unstable (p swung 0.45-1.6)
+    },
     "run": {
         "checkpoint_every_s": (_num(1, 1e5), 600.0),
         "progress_every_s": (_num(0.1, 1e5), 30.0),
@@ -88,7 +93,10 @@ SPEC = {
     },
 }
 # sections that may be left out entirely (all keys have defaults, or only some stages need them)
-OPTIONAL_SECTIONS = {"pack", "effects", "run", "guards", "heaviside", "sinusoidal"}
+OPTIONAL_SECTIONS = {"pack", "effects", "run", "guards", "heaviside", "sinusoidal", "cell"}
+# keys that only one cell kind uses: given explicitly for the other kind, they are an error
+WALL_ONLY = ("sampling.bulk_exclusion_d",)
+PERIODIC_ONLY = ("cell.mass",)
 STAGE_SECTIONS = {"heaviside": "heaviside", "sinusoidal": "sinusoidal"}
 
 
@@ -100,6 +108,10 @@ def _fmt_range(s):
 
 def _check_value(name, spec, v):
     kind = spec["kind"]
+    if kind == "choice":
+        if v not in spec["choices"]:
+            raise SceneError(f"scene error: {name} = {v!r} must be one of {', '.join(spec['choices'])}")
+        return v
     if kind == "bool":
         if not isinstance(v, bool):
             raise SceneError(f"scene error: {name} = {v!r} must be true or false")
@@ -175,6 +187,8 @@ def validate(raw, stage=None):
             else:
                 o[k] = default
         out[sec] = o
+    _check_cell_kind(raw, out["cell"]["kind"])
+    _check_contact_law(out)
     # cross-key checks
     m, s = out["material"], out["sampling"]
     if s["coarse_interval"] < s["fine_interval"]:
@@ -185,11 +199,38 @@ def validate(raw, stage=None):
             f"scene error: sampling.bulk_exclusion_d = {s['bulk_exclusion_d']:g} leaves no bulk band "
             f"(needs H_over_d - 2*bulk_exclusion_d >= 1, H_over_d = {H:g})")
     W = out["geometry"]["W_over_H"] * H
+    if out["cell"]["kind"] == "periodic" and out["geometry"]["W_over_H"] > 1.1:
+        # YADE's flipCell keeps a sheared cell Lees-Edwards (only the top edge shifts by W) only if
+        # W <= 1.15 L_y; a wider cell gets its axes mixed at the first flip
+        raise SceneError(f"scene error: geometry.W_over_H = {out['geometry']['W_over_H']:g} is out of range "
+                         f"[0.5, 1.1] for cell.kind = periodic (the sheared cell is flipped by whole periods)")
     if W < 3 * m["size_ratio_max"]:
         raise SceneError("scene error: geometry.W_over_H too small: the periodic width must hold 3 of the largest disks")
     if out["pack"]["initial_solid_fraction"] >= out["pack"]["solid_fraction_guess"]:
         raise SceneError("scene error: pack.initial_solid_fraction must be below pack.solid_fraction_guess")
     return out
+
+
+def _check_cell_kind(raw, kind):
+    """Reject keys of the other cell kind, naming the key (only keys written in the file count)."""
+    other = WALL_ONLY if kind == "periodic" else PERIODIC_ONLY
+    for name in other:
+        sec, k = name.split(".")
+        if isinstance(raw.get(sec), dict) and k in raw[sec]:
+            owner = "a wall cell" if kind == "periodic" else "a periodic cell"
+            raise SceneError(f"scene error: {name} applies to {owner} only (cell.kind = {kind})")
+
+
+def _check_contact_law(out):
+    """Default viscel for a wall cell, frictvisco for a periodic cell; viscel is refused in a periodic cell."""
+    m, kind = out["material"], out["cell"]["kind"]
+    if m["contact_law"] is None:
+        m["contact_law"] = "frictvisco" if kind == "periodic" else "viscel"
+    if kind == "periodic" and m["contact_law"] == "viscel":
+        raise SceneError(
+            "scene error: material.contact_law = 'viscel' cannot be used with cell.kind = periodic: YADE's "
+            "Law2_ScGeom_ViscElPhys_Basic adds the periodic image's velocity with the wrong sign, so every "
+            "contact across the sheared boundary slides (use frictvisco)")
 
 
 def load(path, stage=None):
@@ -223,6 +264,8 @@ def derived(scene):
     smin, smax = m["size_ratio_min"], m["size_ratio_max"]
     D2 = d**2 * (smin**2 + smin * smax + smax**2) / 3  # <D^2> for D uniform
     n_wall = max(3, int(math.floor(W / d + 1e-9)))
-    N = int(round(scene["pack"]["solid_fraction_guess"] * W * (H - d) / (math.pi * D2 / 4)))
+    # grains fill the gap between the walls' centre lines less d, or the whole periodic cell
+    H_grains = H if scene.get("cell", {}).get("kind") == "periodic" else H - d
+    N = int(round(scene["pack"]["solid_fraction_guess"] * W * H_grains / (math.pi * D2 / 4)))
     return dict(d=d, rho=rho, p=p, H=H, W=W, kn=kn, kt=kn * m["kt_over_kn"], m_d=m_d, tc=tc, dt=dt,
                 T0=T0, V0=V0, gammadot=gd, U=U, N=N, n_wall=n_wall)

@@ -140,7 +140,7 @@ class Stage:
                   f"strain {self.st['strain']:.5f}, {self.st['rows']} rows kept", flush=True)
         O.dt = self.st["dt"]
         build.set_wall_load(self.lay, self.st["load"])
-        self.bulk = measure.Bulk(self.lay, self.der["d"])
+        self.bulk = measure.bulk_for(self.lay, self.der["d"])
         self.csv = open(self.csv_path, "a")
         self.t_wall0 = time.time()
         self.cpu0 = time.process_time()
@@ -364,7 +364,7 @@ class Stage:
         d = der["d"]
         vals = [row[k] for k in ("strain", "sigma_xy", "p", "gap")] + [w["fx_top"], w["fy_top"]]
         if ys is None:
-            ys = np.asarray(measure.yu.coordsAndDisplacements(1)[0][: self.lay["N"]])
+            ys = self.bulk.ys()
         if not all(math.isfinite(v) for v in vals) or not np.all(np.isfinite(ys)):
             raise GuardError(f"NaN in positions or forces at iteration {self._it} (t = {row['t']:.4f})")
         out = np.nonzero((ys < w["y_bot"]) | (ys > w["y_top"]))[0]
