@@ -41,6 +41,8 @@ SCHEMA = ROOT / "workflow" / "schemas" / "config.schema.yaml"
 #: Largest inertial number taken as quasi-static (the model's regime, docs/model.md):
 #: above it a campaign needs ``loading.allow_inertial: true``.
 QUASI_STATIC_MAX_I = 1.0e-2
+#: Widest periodic cell (W/H) that YADE's flipCell keeps Lees-Edwards (yade_scripts/scene.py checks it too).
+PERIODIC_MAX_W_OVER_H = 1.1
 #: Calibration set names are path parts and Snakemake wildcards (workflow/rules/common.smk).
 SET_NAME = re.compile(r"^[A-Za-z0-9.-]+(_[A-Za-z0-9.-]+)*$")
 #: Top-level folders of the repository that hold code or inputs: never a results folder.
@@ -169,7 +171,18 @@ def cell_problems(config: dict) -> list[str]:
         out.append(problem("sampling.fine_interval", s["fine_interval"],
                            f"is above sampling.coarse_interval = {_v(s['coarse_interval'])}",
                            "fine_interval <= coarse_interval"))
-    out += _bulk_problems(cell["H_over_d"], s.get("bulk_exclusion_d", scene_default("sampling", "bulk_exclusion_d")), "the gap cell.H_over_d")
+    periodic = cell.get("kind", "walls") == "periodic"
+    if not periodic:
+        out += _bulk_problems(cell["H_over_d"], s.get("bulk_exclusion_d", scene_default("sampling", "bulk_exclusion_d")),
+                              "the gap cell.H_over_d")
+    elif cell["W_over_H"] > PERIODIC_MAX_W_OVER_H:
+        out.append(problem("cell.W_over_H", cell["W_over_H"],
+                           "is too wide for a periodic cell (YADE flips the sheared cell by whole periods, "
+                           "which mixes the axes of a cell wider than about 1.15 times its height)",
+                           f"W_over_H <= {PERIODIC_MAX_W_OVER_H:g} with cell.kind = periodic"))
+    if not periodic and "mass" in cell:
+        out.append(problem("cell.mass", cell["mass"], "applies to a periodic cell only (the wall's mass is its disks')",
+                           "leave it out, or set cell.kind: periodic"))
     W = cell["W_over_H"] * cell["H_over_d"]
     if W < 3 * mat["size_ratio_max"]:
         out.append(problem("cell.W_over_H", cell["W_over_H"],
@@ -380,6 +393,8 @@ def study_problems(config: dict) -> list[str]:
         points = grid.unique_points(grid.expand(acc))
     except (ValueError, KeyError) as exc:
         return [f"config error: {str(exc).strip(chr(39))}"]
+    if config["cell"].get("kind", "walls") == "periodic":
+        return []
     bulk = config["sampling"].get("bulk_exclusion_d", scene_default("sampling", "bulk_exclusion_d"))
     out = []
     for H in sorted(set(points["H_over_d"])):

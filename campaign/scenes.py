@@ -11,6 +11,8 @@ from pathlib import Path
 PASSTHROUGH = ["timestep", "pack", "preshear", "sampling", "effects", "run", "guards"]
 # Scene blocks that cannot change a DEM result: wall-clock intervals of checkpoints and progress lines.
 NOT_IN_RESULT = ["run"]
+# Config cell keys that are the scene's geometry; cell.kind and cell.mass go to the scene's cell section.
+GEOMETRY_KEYS = ("H_over_d", "W_over_H")
 
 
 def scene_from_config(config: dict, case: dict, label: str) -> dict:
@@ -25,16 +27,22 @@ def scene_from_config(config: dict, case: dict, label: str) -> dict:
     label : str
         The case label, kept in ``meta`` for the sidecars.
     """
+    cell = config["cell"]
+    kind = cell.get("kind", "walls")
     scene = {
         "seed": case["seed"],
         "meta": {"case": label, "campaign": config["campaign"]},
-        "geometry": dict(config["cell"]),
+        "geometry": {k: cell[k] for k in GEOMETRY_KEYS},
         "material": {**config["material"], "pressure": case["pressure"]},
         "loading": {"inertial_number": case["inertial_number"]},
     }
+    if kind != "walls":   # a wall cell's scene stays as it was before cell kinds existed (same rerun key)
+        scene["cell"] = {k: cell[k] for k in ("kind", "mass") if k in cell}
     for block in PASSTHROUGH:
         if config.get(block):
             scene[block] = dict(config[block])
+    if kind == "periodic":   # no walls, no band next to them: the schema's default is for the wall cell
+        scene.get("sampling", {}).pop("bulk_exclusion_d", None)
     for protocol, spec in config["protocols"].items():
         scene[protocol] = dict(spec)
     return scene

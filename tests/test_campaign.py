@@ -63,3 +63,23 @@ def test_scene_file_is_rewritten_only_when_its_content_changes(tmp_path):
     os.utime(path, (1, 1))
     assert write_scene(scene, path) is False and path.stat().st_mtime == 1
     assert write_scene({**scene, "seed": 99}, path) is True and path.stat().st_mtime > 1
+
+
+def test_periodic_cell_config_gives_a_periodic_scene_without_the_wall_band():
+    config = copy.deepcopy(QUICK)
+    config["cell"] = {"H_over_d": 12, "W_over_H": 1.0, "kind": "periodic", "mass": 0.5}
+    config["sampling"]["bulk_exclusion_d"] = 3      # the schema's default, filled in for every config
+    label, case = next(iter(cases(config).items()))
+    scene = scene_from_config(config, case, label)
+    assert scene["cell"] == {"kind": "periodic", "mass": 0.5}
+    assert scene["geometry"] == {"H_over_d": 12, "W_over_H": 1.0}
+    assert "bulk_exclusion_d" not in scene["sampling"]
+    checked = scene_validator()(scene, stage="heaviside")
+    assert checked["material"]["contact_law"] == "frictvisco"
+
+
+def test_wall_cell_scene_is_unchanged_by_an_explicit_kind():
+    label, case = next(iter(cases(QUICK).items()))
+    explicit = copy.deepcopy(QUICK)
+    explicit["cell"]["kind"] = "walls"
+    assert result_key(scene_from_config(explicit, case, label)) == result_key(scene_from_config(QUICK, case, label))
