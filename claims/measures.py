@@ -94,12 +94,13 @@ def crossing(s, A_xx, A_xy, noisy: bool) -> dict:
     return {"axis": axis, "s_cross": float(s_c), "A_xx_cross": float(a_c), "z": float(z)}
 
 
-def transition_width(s, A_xx, A_xy, low: float = 0.1, high: float = 0.9, end_fraction: float = 0.2) -> float:
+def transition_width(s, A_xx, A_xy, low: float = 0.1, high: float = 0.9, end_fraction: float = 0.1) -> float:
     r"""Strain over which theta_A makes the middle of its change (from ``low`` to ``high`` of it).
 
     The axial angle is unwrapped on the doubled angle; its change
     :math:`\Delta = \bar\theta_{end} - \theta_0` (end: mean over the last
-    ``end_fraction`` of the samples) and the width
+    ``end_fraction`` of the strain, where the angle has settled if the run is
+    long enough) and the width
 
     .. math:: w = s\big(f \ge h\big) - s\big(f \ge l\big), \qquad f = (\theta - \theta_0)/\Delta
 
@@ -109,8 +110,8 @@ def transition_width(s, A_xx, A_xy, low: float = 0.1, high: float = 0.9, end_fra
     s = np.asarray(s, float)
     th = fabric_angle_deg(np.asarray(A_xx, float), np.asarray(A_xy, float))
     u = np.degrees(np.unwrap(np.radians(2.0 * th))) / 2.0
-    n_end = max(1, int(end_fraction * u.size))
-    delta = float(np.mean(u[-n_end:]) - u[0])
+    end = s >= s[-1] - end_fraction * (s[-1] - s[0])
+    delta = float(np.mean(u[end]) - u[0])
     if abs(delta) < 20.0:
         return math.nan
     f = (u - u[0]) / delta

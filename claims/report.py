@@ -37,6 +37,7 @@ def forest_plot(table, path) -> None:
             ax.set_xlim(min(span) - pad, max(span) + pad)
         else:
             ax.text(0.5, 0.5, "not computed", transform=ax.transAxes, ha="center", va="center", color=colour)
+            ax.set_xticks([])
         ax.set_yticks([])
         side = "paper: " + ("above" if r["paper_side"] == ">" else "below") + f" {r['null']:g}"
         ax.set_ylabel(f"claim {r['claim_id']}", rotation=0, ha="right", va="center")
