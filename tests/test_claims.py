@@ -57,8 +57,8 @@ def add_correlated_noise(case, seed):
         d.to_csv(path, index=False)
 
 
-def table_for_truth(root, truth):
-    """Claims table of 4 noisy seeds made by ``truth``, both models predicting with the known parameters."""
+def comparison_for_truth(root, truth):
+    """4 noisy seeds made by ``truth`` under ``root/dem``, compared with both models at the known parameters."""
     params = strong_pole_params()
     dirs = write_ensemble(root / "dem", params, seeds=(1, 2, 3, 4), model=truth,
                           friction="eq2" if truth == "model1" else "quadratic",
@@ -67,18 +67,29 @@ def table_for_truth(root, truth):
         add_correlated_noise(d, k)
     save_params(params, root / "params.yaml")
     c = comparison.run(dirs, root / "params.yaml", ["heaviside", "sinusoidal"], set_name="other", train_cases=[])
-    pred = c.predictions.assign(in_sample=False)    # train_cases=[]: every run is out of sample
+    return dirs, c
+
+
+def table_of(dirs, c):
+    """Claims table of a comparison's curves (every run out of sample: the comparison had train_cases=[])."""
+    pred = c.predictions.assign(in_sample=False)
     return claims_table(pred, [read_dem_case(d) for d in dirs], eq2=None, n_resamples=1000).set_index("claim_id")
 
 
 @pytest.fixture(scope="module")
-def model1_truth(tmp_path_factory):
-    return table_for_truth(tmp_path_factory.mktemp("m1"), "model1")
+def model1_case(tmp_path_factory):
+    root = tmp_path_factory.mktemp("m1")
+    return (root, *comparison_for_truth(root, "model1"))
+
+
+@pytest.fixture(scope="module")
+def model1_truth(model1_case):
+    return table_of(*model1_case[1:])
 
 
 @pytest.fixture(scope="module")
 def model2_truth(tmp_path_factory):
-    return table_for_truth(tmp_path_factory.mktemp("m2"), "model2")
+    return table_of(*comparison_for_truth(tmp_path_factory.mktemp("m2"), "model2"))
 
 
 # --------------------------------------------------------------------------- verdicts on model-made data
@@ -214,7 +225,31 @@ def test_early_rmse_uses_only_the_window():
     assert measures.early_rmse(s, dem, model, 0.1) == pytest.approx(0.02)
 
 
+def test_a_steady_angle_above_135_degrees_contradicts_the_reachable_steady_row():
+    from claims.table import Bootstrap, steady_angle_row
+    row = steady_angle_row({f"p1_I0.001_s{k}": {"theta_A": t} for k, t in enumerate((139.0, 140.5, 138.2))},
+                           Bootstrap(500))
+    assert row["verdict"] == "contradicted" and row["low"] > 135.0
+    assert "p1_I0.001_s0, p1_I0.001_s1, p1_I0.001_s2" in row["detail"]
+
+
 # --------------------------------------------------------------------------- command line
+
+
+def test_command_line_writes_the_table_the_figure_and_the_readme_section(model1_case, tmp_path):
+    root, dirs, c = model1_case
+    out = tmp_path / "compare" / "other"
+    out.mkdir(parents=True)
+    c.predictions.to_csv(out / "predictions.csv", index=False)
+    c.errors.to_csv(out / "errors.csv", index=False)
+    assert main(["--compare", str(tmp_path / "compare"), "--dem", *map(str, dirs), "--calibration",
+                 str(root / "params.yaml"), "--resamples", "500", "--out", str(tmp_path / "claims")]) == 0
+    table = pd.read_csv(tmp_path / "claims" / "paper_claims.csv")
+    assert len(table) == 10 and table.loc[table["claim_id"] == "2b", "n"].item() == 4   # Eq. 2 read this time
+    section = (tmp_path / "claims" / "README_section.md").read_text()
+    assert section.count("\n| ") == 1 + len(table) and "**reproduced**" in section
+    assert (tmp_path / "claims" / "paper_claims.png").stat().st_size > 10_000
+
 
 
 def test_command_line_names_a_missing_comparison_and_exits_2(tmp_path, capsys):
