@@ -190,7 +190,8 @@ def case_dirs_with(case_dirs, protocol):
     DEMInputError
         When none does (the protocol was asked for, but no case ran it).
     """
-    dirs = [d for d in case_dirs if (Path(d) / f"{protocol}.csv").exists()]
+    # a missing case directory is kept: reading it reports it as not found
+    dirs = [d for d in case_dirs if not Path(d).is_dir() or (Path(d) / f"{protocol}.csv").exists()]
     if not dirs:
         raise DEMInputError(f"no case holds a {protocol} run ({protocol}.csv missing in "
                             f"{', '.join(str(d) for d in case_dirs)}); drop it from --protocols")
