@@ -70,7 +70,7 @@ def markdown_section(table, title="The paper's claims, decided", source="") -> s
              "|---|---|---|---|---|---|---|---|"]
     for _, r in table.iterrows():
         interval = f"{_num(r['estimate'])} [{_num(r['low'])}, {_num(r['high'])}] {r['unit']}"
-        cell = lambda s: str(s).replace("|", "/")  # noqa: E731
+        cell = lambda s: str(s).replace("|", "\\|")  # noqa: E731  (|A| stays |A| in a Markdown table)
         lines.append(f"| {r['claim_id']} | {cell(r['claim'])} ({cell(r['source'])}) | {cell(r['statistic'])}"
                      f"{'; ' + cell(r['detail']) if str(r['detail']) not in ('', 'nan') else ''} | {cell(interval)} | "
                      f"{r['paper_side']} {_num(r['null'])} | {cell(r['test'])} | {r['n']} {cell(r['n_unit'])} | "
