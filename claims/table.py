@@ -216,7 +216,8 @@ def early_error_row(runs, claim_id, claim, source, column, label, window, boot) 
     return _row(
         claim_id, claim, source,
         f"RMSE of {label} over the first {window:g} strain after the reversal, Model 1 minus Model 2, out of "
-        f"sample, paired on each run, mean per seed", label, 0.0, "<", est, lo, hi,
+        f"sample, paired on each run, mean per seed", f"difference of RMSE of {label} (dimensionless)", 0.0, "<",
+        est, lo, hi,
         "paired " + stats.bootstrap_test_name(boot.n_resamples), n, SEED_UNIT,
         f"mean RMSE Model 1 {_fmt(np.nanmean(r['model1']) if pairs else math.nan)}, Model 2 "
         f"{_fmt(np.nanmean(r['model2']) if pairs else math.nan)}; {_oos_detail(pairs, missing)}")
