@@ -16,7 +16,8 @@ RULE = ("A claim is **reproduced** when the 95 % interval of its statistic lies 
         "the null value (no effect), **contradicted** when it lies entirely on the other side, and "
         "**inconclusive** otherwise (the interval contains the null, or too few seeds to compute it). "
         "\"theta_A always passes through 90 degrees\" is also contradicted by one run that clearly crosses "
-        "the horizontal. Intervals are over seeds, pooled across ensembles; model comparisons are out of "
+        "the horizontal. Intervals are over seeds, pooled across ensembles (percentile bootstrap, widened to the "
+        "Student t interval where wider); model comparisons are out of "
         "sample (a calibration set scored on the runs it was not fitted on) and paired on each run.")
 
 

@@ -13,7 +13,8 @@ the other side, **inconclusive** otherwise (also when it cannot be computed).
 The one addition: "theta_A *always* passes through 90 degrees" is also
 contradicted by a single run that clearly crosses the horizontal.
 
-Units of resampling. Every interval is over seeds (DEM cases: one pre-shear
+Units of resampling. Every interval (``stats.mean_interval``: percentile
+bootstrap, at least as wide as the Student t interval) is over seeds (DEM cases: one pre-shear
 and its reversal runs), pooled across ensembles (pressures and inertial
 numbers; the claims are made for every ensemble): a seed's value is the mean
 over its runs (protocols) and, for the model comparisons, over the calibration

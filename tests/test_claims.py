@@ -255,3 +255,13 @@ def test_command_line_writes_the_table_the_figure_and_the_readme_section(model1_
 def test_command_line_names_a_missing_comparison_and_exits_2(tmp_path, capsys):
     assert main(["--compare", str(tmp_path / "absent"), "--dem", str(tmp_path), "--out", str(tmp_path / "o")]) == 2
     assert "absent: comparison folder not found" in capsys.readouterr().err
+
+
+def test_interval_of_three_seeds_is_at_least_the_student_t_interval():
+    # three seeds on one side: the percentile bootstrap spans only their range; the t interval
+    # mean +- t(0.975, 2) s / sqrt(3) = 2 +- 4.303 * 1 / sqrt(3) reaches below 0
+    est, lo, hi, n = stats.mean_interval([1.0, 2.0, 3.0])
+    half = 4.302652729911275 / np.sqrt(3.0)
+    assert (est, n) == (2.0, 3)
+    assert lo == pytest.approx(2.0 - half, rel=1e-9) and hi == pytest.approx(2.0 + half, rel=1e-9)
+    assert stats.verdict(lo, hi, 0.0, ">") == "inconclusive"
