@@ -29,6 +29,7 @@ include: "workflow/rules/common.smk"
 include: "workflow/rules/dem.smk"
 include: "workflow/rules/calibrate.smk"
 include: "workflow/rules/compare.smk"
+include: "workflow/rules/claims.smk"
 include: "workflow/rules/accuracy.smk"
 
 

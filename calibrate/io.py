@@ -231,13 +231,23 @@ def _ar1_variance_inflation(resid) -> float:
 
 
 def read_case(case_dir, protocols=REVERSAL_PROTOCOLS, min_samples: int = MIN_SAMPLES) -> Case:
-    """Read a case directory: its pre-shear (checked for steady state) and the chosen reversal runs."""
+    """Read a case directory: its pre-shear (checked for steady state) and the chosen reversal runs it has.
+
+    A case need not hold every protocol (a campaign may run the sinusoidal
+    reversal for some seeds only): each reversal run present is one transient
+    and the absent ones are skipped. A case with none of ``protocols`` is an
+    error naming the directory.
+    """
     case_dir = Path(case_dir)
     if not case_dir.is_dir():
         raise DEMInputError(f"{case_dir}: case directory not found")
     pre = read_run(case_dir / "preshear.csv", "preshear", min_samples)
     pre.meta["steady"] = check_steady(pre, raise_on_drift=False)  # judged per group in read_cases
-    runs = {p: read_run(case_dir / f"{p}.csv", p, min_samples) for p in protocols}
+    present = [p for p in protocols if (case_dir / f"{p}.csv").exists()]
+    if not present:
+        raise DEMInputError(f"{case_dir}: no reversal run of the protocols {', '.join(protocols)} "
+                            f"(expected at least one of {', '.join(f'{p}.csv' for p in protocols)})")
+    runs = {p: read_run(case_dir / f"{p}.csv", p, min_samples) for p in present}
     g_pre = pre.data["gammadot"].to_numpy()
     for r in runs.values():
         if reversal_indices(np.concatenate([g_pre, r.data["gammadot"].to_numpy()])).size == 0:
@@ -248,10 +258,18 @@ def read_case(case_dir, protocols=REVERSAL_PROTOCOLS, min_samples: int = MIN_SAM
 
 
 def read_cases(case_dirs, protocols=REVERSAL_PROTOCOLS, min_samples: int = MIN_SAMPLES) -> list:
-    """Read several case directories; seeds must be distinct within a group."""
+    """Read several case directories; seeds must be distinct within a group.
+
+    Cases may hold different sets of protocols (``read_case``); every
+    protocol asked for must be present in at least one case.
+    """
     if not case_dirs:
         raise DEMInputError("no case directory given")
     cases = [read_case(c, protocols, min_samples) for c in case_dirs]
+    for p in protocols:
+        if not any(p in c.runs for c in cases):
+            raise DEMInputError(f"no case holds a {p} run ({p}.csv missing in "
+                                f"{', '.join(str(c.path) for c in cases)}); drop it from --protocols")
     seen = set()
     for c in cases:
         key = (c.group, c.seed)

@@ -295,6 +295,7 @@ def compare_steady(quality, final, doc1, doc2, steady, xc_bound) -> None:
         s = steady_check(doc)[q["model"]]
         q.update({f"steady_{k}": v for k, v in s.items() if k != "error"})
         q["dem_steady_A_norm"], q["dem_steady_theta_A"], q["dem_steady_X"] = steady["A_norm"], steady["theta_A"], steady["X"]
+        q.update(steady_angle_flag(steady["theta_A"]))
         if q["model"] == "model1":
             q["X_c"] = doc["model1"]["X_c"]
             q["mirrored_steady_X_below_X_c"] = bool("X" in s and -s["X"] < doc["model1"]["X_c"])
@@ -302,6 +303,37 @@ def compare_steady(quality, final, doc1, doc2, steady, xc_bound) -> None:
             q["dem_X_reversal_bound"] = steady["X_reversal_bound"]
             q["X_c_lower_bound"] = xc_bound[q["route"]]
             q["X_c_at_lower_bound"] = bool(q["X_c"] <= q["X_c_lower_bound"] * (1 + 1e-6))
+
+
+#: Largest steady theta_A (degrees, positive shear) Eq. 4 can reach with alpha2 < 0 (docs/model.md, "Steady state").
+STEADY_THETA_LIMIT = 135.0
+
+
+def steady_angle_flag(dem_theta: float) -> dict:
+    r"""Whether the DEM's steady angle lies where no stable steady state of Eq. 4 can be.
+
+    A stable steady state of Eq. 4 (:math:`\alpha_2 < 0`) with :math:`X_{ss} < 0`
+    has :math:`a = \alpha_1/(2 + \alpha_2^2) < 0`, so for positive shear
+    :math:`90^\circ < \theta_A \le 135^\circ` (docs/model.md). A DEM steady
+    angle above 135 degrees (a cell biased by its walls) cannot be fitted: the
+    fit trades the steady angle against the transients. Said here rather than
+    hidden in the scores.
+
+    Parameters
+    ----------
+    dem_theta : float
+        The DEM's steady theta_A for positive shear, degrees (``io.steady_values``).
+
+    Returns
+    -------
+    dict
+        ``steady_theta_above_135`` (bool) and ``steady_note`` (the explanation, "" if below).
+    """
+    above = bool(dem_theta > STEADY_THETA_LIMIT)
+    note = (f"the DEM's steady theta_A = {dem_theta:.1f} deg is above {STEADY_THETA_LIMIT:.0f} deg, where Eq. 4 "
+            f"with alpha2 < 0 has no steady state: the models' steady angle cannot match it and the fit trades "
+            f"it against the transients" if above else "")
+    return {"steady_theta_above_135": above, "steady_note": note}
 
 
 def friction_quality(r1) -> list:

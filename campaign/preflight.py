@@ -46,7 +46,7 @@ PERIODIC_MAX_W_OVER_H = 1.1
 #: Calibration set names are path parts and Snakemake wildcards (workflow/rules/common.smk).
 SET_NAME = re.compile(r"^[A-Za-z0-9.-]+(_[A-Za-z0-9.-]+)*$")
 #: Top-level folders of the repository that hold code or inputs: never a results folder.
-SOURCE_FOLDERS = {"campaign", "calibrate", "compare", "config", "dem_contract", "dem_study", "docs", "model",
+SOURCE_FOLDERS = {"campaign", "calibrate", "claims", "compare", "config", "dem_contract", "dem_study", "docs", "model",
                   "profiles", "tests", "workflow", "yade_scripts", ".git", ".snakemake"}
 
 

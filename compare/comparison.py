@@ -21,11 +21,12 @@ each model's own steady state (``model.steady_state``) for the models.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-from dem_contract import angle_difference, fabric_angle_deg, fabric_norm
+from dem_contract import DEMInputError, angle_difference, fabric_angle_deg, fabric_norm
 from model import load_params, steady_state
 
 from . import metrics
@@ -154,7 +155,7 @@ def run(case_dirs, params_path, protocols, set_name="all", train_cases=None, tra
     pred_rows, err_rows, claim_rows, ensembles = [], [], [], {}
     steady = {}
     for protocol in protocols:
-        revs = [load_reversal(d, protocol) for d in case_dirs]
+        revs = [load_reversal(d, protocol) for d in case_dirs_with(case_dirs, protocol)]
         preds = {m: [predict(r, params, m, friction[m]) for r in revs] for m in MODELS}
         sign = -1 if np.median(revs[0].data["gammadot"].to_numpy()[-5:]) < 0 else 1
         for m in MODELS:
@@ -179,6 +180,22 @@ def run(case_dirs, params_path, protocols, set_name="all", train_cases=None, tra
             claim_rows += claims
     return Comparison(predictions=pd.concat(pred_rows, ignore_index=True), errors=pd.DataFrame(err_rows),
                       claims=pd.DataFrame(claim_rows), ensembles=ensembles)
+
+
+def case_dirs_with(case_dirs, protocol):
+    """The case directories that hold a ``<protocol>.csv`` run (cases may hold different protocols).
+
+    Raises
+    ------
+    DEMInputError
+        When none does (the protocol was asked for, but no case ran it).
+    """
+    # a missing case directory is kept: reading it reports it as not found
+    dirs = [d for d in case_dirs if not Path(d).is_dir() or (Path(d) / f"{protocol}.csv").exists()]
+    if not dirs:
+        raise DEMInputError(f"no case holds a {protocol} run ({protocol}.csv missing in "
+                            f"{', '.join(str(d) for d in case_dirs)}); drop it from --protocols")
+    return dirs
 
 
 CURVE_COLUMNS = ("s_rev", "strain", "A_xx", "A_xy", "A_norm", "theta_A", "mu")

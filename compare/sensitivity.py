@@ -26,6 +26,7 @@ from dem_contract import angle_difference, split_case_label
 from model import load_params, params_from_dict
 
 from . import metrics
+from .comparison import case_dirs_with
 from .dem import load_reversal
 from .figures import sensitivity_figure
 from .metrics import QUANTITIES
@@ -68,10 +69,9 @@ def run(case_dirs, params_path, protocols, figure_path, set_name="all", fraction
     """Perturb, integrate, tabulate and plot; returns (table, number of integrations)."""
     params = load_params(params_path)
     friction = dict(DEFAULT_FRICTION, **(friction or {}))
-    case = _representative(case_dirs)
     rows, bands, n = [], {}, 0
     for protocol in protocols:
-        rev = load_reversal(case, protocol)
+        rev = load_reversal(_representative(case_dirs_with(case_dirs, protocol)), protocol)  # cases may lack a protocol
         dem = rev.data
         for model in MODELS:
             nominal = predict(rev, params, model, friction[model])

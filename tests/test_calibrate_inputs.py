@@ -74,3 +74,22 @@ def test_command_line_exits_2_naming_the_file(good_case, tmp_path):
     assert r.returncode == 2
     assert "heaviside.csv: column 'A_xx'" in r.stderr
     assert not (out / "params.yaml").exists()
+
+
+def test_cases_with_different_protocols_are_read_each_with_its_own_runs(good_case, tmp_path):
+    # a campaign may run the sinusoidal reversal for some seeds only: each run present is one transient
+    both = copy_case(good_case, tmp_path / "p1_I0.001_s1")
+    heaviside_only = copy_case(good_case, tmp_path / "p1_I0.001_s2")
+    (heaviside_only / "sinusoidal.csv").unlink()
+    (heaviside_only / "sinusoidal.json").unlink()
+    cases = io.read_cases([both, heaviside_only])
+    assert [set(c.runs) for c in cases] == [{"heaviside", "sinusoidal"}, {"heaviside"}]
+
+
+def test_a_protocol_no_case_holds_is_an_error_naming_it(good_case, tmp_path):
+    case = copy_case(good_case, tmp_path / "p1_I0.001_s1")
+    (case / "sinusoidal.csv").unlink()
+    with pytest.raises(io.DEMInputError, match=r"no case holds a sinusoidal run"):
+        io.read_cases([case])
+    with pytest.raises(io.DEMInputError, match=r"p1_I0\.001_s1: no reversal run of the protocols sinusoidal"):
+        io.read_case(case, protocols=("sinusoidal",))

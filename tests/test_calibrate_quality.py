@@ -54,3 +54,11 @@ def test_one_seed_calibration_warns_in_log_and_table_and_writes_no_inf(tmp_path)
     models = q[q["model"].isin(["model1", "model2"])]
     assert models["heldout_score"].isna().all()        # one seed: no replicate holds a seed out ...
     assert models["score_note"].str.contains("no bootstrap replicate held a seed out").all()   # ... and it says so
+
+
+def test_a_dem_steady_angle_above_135_degrees_is_flagged_with_a_note():
+    from calibrate.pipeline import steady_angle_flag
+    assert steady_angle_flag(124.7) == {"steady_theta_above_135": False, "steady_note": ""}
+    flag = steady_angle_flag(141.0)
+    assert flag["steady_theta_above_135"] is True
+    assert "141.0 deg is above 135 deg" in flag["steady_note"]

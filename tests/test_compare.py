@@ -187,3 +187,16 @@ def test_reversal_start_comes_from_the_sidecar_when_the_first_sample_is_later(tm
     assert rev.strain0 == pytest.approx(0.3) and rev.data["s_rev"].iloc[0] == pytest.approx(0.003)
     pred = predict(rev, default_params(), "model1")
     assert np.max(np.abs(pred.table["A_norm"].to_numpy() - rev.data["A_norm"].to_numpy())) < 1e-8
+
+
+def test_cases_with_different_protocols_are_compared_each_on_the_runs_it_has(tmp_path, params_file):
+    dirs = write_ensemble(tmp_path, default_params(), seeds=(1, 2), preshear_strain=0.3, reversal_strain=0.3)
+    (dirs[1] / "sinusoidal.csv").unlink()
+    c = comparison.run(dirs, params_file, ["heaviside", "sinusoidal"])
+    seeds = c.errors[(c.errors["level"] == "seed") & (c.errors["model"] == "model1")]
+    assert sorted(zip(seeds["case"], seeds["protocol"])) == [
+        ("p1_I0.001_s1", "heaviside"), ("p1_I0.001_s1", "sinusoidal"), ("p1_I0.001_s2", "heaviside")]
+    for d in dirs:
+        (d / "sinusoidal.csv").unlink(missing_ok=True)
+    with pytest.raises(comparison.DEMInputError, match="no case holds a sinusoidal run"):
+        comparison.run(dirs, params_file, ["sinusoidal"])

@@ -28,7 +28,7 @@ def dem_outputs(protocols=None):
 
 def all_targets():
     targets = dem_outputs() + [f"{RESULTS}/dem/campaign_summary.csv"]
-    targets += calibration_targets() + compare_targets() + accuracy_targets()
+    targets += calibration_targets() + compare_targets() + claims_targets() + accuracy_targets()
     return targets
 
 

@@ -1,0 +1,61 @@
+r"""Command line of the claims stage.
+
+::
+
+    python -m claims --compare results/compare --dem results/dem/<case> ... \
+        [--calibration results/calibration/all/params.yaml] [--sets all heaviside_only ...] \
+        [--resamples 2000] [--seed 0] --out results/claims
+        # -> paper_claims.csv, paper_claims.png, README_section.md
+
+Bad input (a missing table or column, a bad DEM file) exits with status 2 and
+a message naming the file.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+from dem_contract import DEMInputError
+
+from . import inputs, report, table
+
+
+def build_parser():
+    ap = argparse.ArgumentParser(prog="python -m claims", description="The paper's claims as a table with verdicts.")
+    ap.add_argument("--compare", required=True, help="the comparison folder results/compare (one sub-folder per set)")
+    ap.add_argument("--dem", nargs="+", required=True, help="DEM case directories results/dem/<label>")
+    ap.add_argument("--calibration", default=None,
+                    help="params.yaml whose Eq. 2 is checked against the collapse (default: <compare>/../calibration/all/params.yaml)")
+    ap.add_argument("--sets", nargs="*", default=None, help="calibration sets to read (default: every one found)")
+    ap.add_argument("--resamples", type=int, default=2000, help="bootstrap resamples (default 2000)")
+    ap.add_argument("--seed", type=int, default=0, help="random seed of the bootstrap")
+    ap.add_argument("--out", required=True, help="output folder, e.g. results/claims")
+    return ap
+
+
+def main(argv=None) -> int:
+    args = build_parser().parse_args(argv)
+    t0 = time.perf_counter()
+    try:
+        if args.resamples < 100:
+            raise ValueError(f"--resamples = {args.resamples}: must be at least 100")
+        out = Path(args.out)
+        out.mkdir(parents=True, exist_ok=True)
+        pred = inputs.read_comparison(args.compare, args.sets)
+        dem_cases = [inputs.read_dem_case(d) for d in args.dem]
+        params = Path(args.calibration) if args.calibration else Path(args.compare).parent / "calibration" / "all" / "params.yaml"
+        tab = table.claims_table(pred, dem_cases, table.eq2_params(params), args.resamples, args.seed)
+        tab.to_csv(out / "paper_claims.csv", index=False, float_format="%.6g")
+        report.forest_plot(tab, out / "paper_claims.png")
+        (out / "README_section.md").write_text(report.markdown_section(tab, source=f"`{out / 'paper_claims.csv'}`"))
+    except (DEMInputError, ValueError) as exc:
+        print(f"claims: error: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:
+        print(f"claims: error: {exc.filename or args.out}: {exc.strerror or exc}", file=sys.stderr)
+        return 2
+    counts = tab["verdict"].value_counts().to_dict()
+    print(f"claims: {len(tab)} claims -> {out} in {time.perf_counter() - t0:.1f} s: {counts}")
+    return 0

@@ -1,0 +1,336 @@
+r"""The claims table: one row per claim of the paper, each with its statistic, interval, test and verdict.
+
+Columns (``COLUMNS``): ``claim_id``, ``claim`` (the paper's words, shortened),
+``source`` (the paper's section or figure), ``statistic`` (what is measured),
+``unit``, ``null`` (the value of no effect), ``paper_side`` (``>`` or ``<``:
+where the paper puts the statistic), ``estimate``, ``low``, ``high`` (95 %
+interval), ``test``, ``n`` and ``n_unit`` (what was counted), ``verdict`` and
+``detail`` (the numbers behind it).
+
+Decision rule (``claims.stats.verdict``): **reproduced** if the 95 % interval
+lies strictly on the paper's side of the null, **contradicted** if strictly on
+the other side, **inconclusive** otherwise (also when it cannot be computed).
+The one addition: "theta_A *always* passes through 90 degrees" is also
+contradicted by a single run that clearly crosses the horizontal.
+
+Units of resampling. Every interval (``stats.mean_interval``: percentile
+bootstrap, at least as wide as the Student t interval) is over seeds (DEM cases: one pre-shear
+and its reversal runs), pooled across ensembles (pressures and inertial
+numbers; the claims are made for every ensemble): a seed's value is the mean
+over its runs (protocols) and, for the model comparisons, over the calibration
+sets that did not see the run. Model comparisons use only out-of-sample
+predictions: a run is scored with a set calibrated on another protocol (e.g.
+``heaviside_only`` scored on the sinusoidal run) or another inertial number
+(``I<a>`` scored on the runs at ``I<b>``), and the two models are paired on
+the same run (difference per run, then per seed).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+
+from model import friction_eq2, load_params
+
+from . import measures, stats
+
+COLUMNS = ["claim_id", "claim", "source", "statistic", "unit", "null", "paper_side", "estimate", "low", "high",
+           "test", "n", "n_unit", "verdict", "detail"]
+MODELS = ("model1", "model2")
+EARLY_A = 0.1      # strain window of the fall of |A| (the paper: "just after the reversal")
+EARLY_MU = 0.05    # strain window of the start of the reversal for mu
+EQ2_MARGIN = 1.1   # Eq. 2 counts as capturing the collapse if its scatter is within 10 % of the best curve's
+STEADY_LIMIT = 135.0
+SEED_UNIT = "seeds (pooled across ensembles)"
+
+
+def _row(claim_id, claim, source, statistic, unit, null, side, est, low, high, test, n, n_unit, detail,
+         verdict=None):
+    return dict(claim_id=claim_id, claim=claim, source=source, statistic=statistic, unit=unit, null=null,
+                paper_side=side, estimate=est, low=low, high=high, test=test, n=n, n_unit=n_unit,
+                verdict=verdict or stats.verdict(low, high, null, side), detail=detail)
+
+
+def _per_seed(values: dict) -> tuple:
+    """(case -> list of values) -> (cases, per-seed means), NaN values dropped, empty seeds left out."""
+    cases, means = [], []
+    for case, v in sorted(values.items()):
+        v = np.asarray(v, float)
+        v = v[np.isfinite(v)]
+        if v.size:
+            cases.append(case)
+            means.append(float(v.mean()))
+    return cases, np.array(means)
+
+
+def _fmt(x, digits=3):
+    return "nan" if not np.isfinite(x) else f"{x:.{digits}g}"
+
+
+# --------------------------------------------------------------------------- DEM-only claims
+
+
+def fall_rows(dem: dict, steady: dict, boot) -> list:
+    """Claim 1: |A| and mu fall abruptly after a reversal (depth beyond noise; strain of the minimum)."""
+    rows = []
+    for qid, q, label in (("1a", "A_norm", "|A|"), ("1b", "mu", "mu")):
+        excess, depth, s_min = {}, {}, {}
+        for (case, group, proto), d in dem.items():
+            if case not in steady:
+                continue
+            a, b = measures.smooth(d["A_xx"]), measures.smooth(d["A_xy"])
+            x = measures.norm_and_angle(a, b)[0] if q == "A_norm" else measures.smooth(d["mu"])
+            ref = steady[case]["A_norm"] if q == "A_norm" else steady[case]["mu"]
+            f = measures.fall(d["s_rev"].to_numpy(), x, ref, noisy=True)
+            excess.setdefault(case, []).append(f["excess"])
+            depth.setdefault(case, []).append(f["depth"])
+            s_min.setdefault(case, []).append(f["s_min"])
+        _, e = _per_seed(excess)
+        est, lo, hi, n = boot(e)
+        _, dd = _per_seed(depth)
+        _, sm = _per_seed(s_min)
+        sm_est, sm_lo, sm_hi, _ = boot(sm)
+        rows.append(_row(
+            qid, f"after a reversal {label} falls abruptly", "the paper, Sec. 4 and 5 (Figs. 4, 5)",
+            f"depth of the minimum of {label} below its steady value, 1 - min/steady, minus the depth its noise "
+            f"alone gives (3 s.d. of the smoothed DEM about a line over the last {measures.TAIL:.0%} of the run, "
+            f"over steady); DEM runs, {measures.SMOOTH}-sample running mean",
+            "fraction of the steady value", 0.0, ">", est, lo, hi, stats.bootstrap_test_name(boot.n_resamples), n,
+            SEED_UNIT,
+            f"mean depth {_fmt(np.mean(dd) if dd.size else math.nan)}; strain of the minimum {_fmt(sm_est)} "
+            f"[{_fmt(sm_lo)}, {_fmt(sm_hi)}] (strain since the reversal)"))
+    return rows
+
+
+def collapse_rows(dem_cases: list, eq2, boot) -> list:
+    """Claim 2: mu is a one-to-one function of X (Fig. 2b), not of A_xy (Fig. 2a); Eq. 2 captures it."""
+    ratio_axy, ratio_eq2, r_x = [], [], []
+    for c in dem_cases:
+        sm = c.samples
+        if len(sm) < 4 * measures.N_BINS:
+            continue
+        rx = measures.binned_scatter(sm["X"], sm["mu"])
+        ra = measures.binned_scatter(sm["A_xy"], sm["stress_ratio"])
+        r_x.append(rx)
+        ratio_axy.append(rx / ra if ra > 0 else math.nan)
+        if eq2 is not None:
+            fit = friction_eq2(sm["X"].to_numpy(), **eq2)
+            ratio_eq2.append(float(np.sqrt(np.mean((sm["mu"].to_numpy() - fit) ** 2))) / rx if rx > 0 else math.nan)
+    rows = []
+    est, lo, hi, n = boot(np.array(ratio_axy))
+    rows.append(_row(
+        "2a", "mu is a one-to-one function of X = A:D'/|D'|, not of A_xy", "the paper, Sec. 3.1 and 5 (Figs. 2a, 2b)",
+        f"per seed, RMS scatter of mu about its best single-valued curve of X (mean in {measures.N_BINS} quantile "
+        f"bins) over the RMS scatter of sigma_xy/p about its best single-valued curve of A_xy (Fig. 2a's axes); "
+        f"reversal runs, raw DEM samples", "ratio", 1.0, "<", est, lo, hi,
+        stats.bootstrap_test_name(boot.n_resamples), n, SEED_UNIT,
+        f"mean scatter of mu about the curve of X: {_fmt(np.mean(r_x) if r_x else math.nan)}"))
+    if eq2 is None:
+        rows.append(_row("2b", "Eq. 2 captures mu(X)", "the paper, Sec. 3.1 (Eq. 2, Fig. 2b)",
+                         "not computed: no params.yaml of calibration set 'all'", "ratio", EQ2_MARGIN, "<",
+                         math.nan, math.nan, math.nan, "none", 0, SEED_UNIT, "", verdict="inconclusive"))
+        return rows
+    est, lo, hi, n = boot(np.array(ratio_eq2))
+    rows.append(_row(
+        "2b", "Eq. 2 captures mu(X) (as well as any single-valued curve of X)", "the paper, Sec. 3.1 (Eq. 2, Fig. 2b)",
+        f"per seed, RMS scatter of mu about Eq. 2 (calibration set 'all') over its scatter about the best "
+        f"single-valued curve of X; null: within {EQ2_MARGIN - 1:.0%}", "ratio", EQ2_MARGIN, "<", est, lo, hi,
+        stats.bootstrap_test_name(boot.n_resamples), n, SEED_UNIT, ""))
+    return rows
+
+
+def passage_row(dem: dict) -> dict:
+    """Claim 3: in the DEM theta_A always passes through 90 degrees (sign of A_xx where A_xy changes sign)."""
+    axes = []
+    for (case, group, proto), d in dem.items():
+        a, b = measures.smooth(d["A_xx"]), measures.smooth(d["A_xy"])
+        axes.append(measures.crossing(d["s_rev"].to_numpy(), a, b, noisy=True)["axis"])
+    k, n = axes.count("90"), len(axes)
+    est, lo, hi, n = stats.clopper_pearson(k, n)
+    against = axes.count("0/180")
+    verdict = "contradicted" if against else None
+    return _row(
+        "3", "in the DEM theta_A always passes through 90 degrees", "the paper, Sec. 4",
+        f"fraction of DEM reversal runs whose theta_A crosses the vertical: A_xx < 0 by more than {measures.Z_CLEAR:g} "
+        f"noise s.d. where A_xy changes sign ({measures.SMOOTH}-sample running mean); null: a coin toss; a run "
+        f"clearly crossing the horizontal (A_xx > 0) contradicts 'always'", "fraction of runs", 0.5, ">", est, lo, hi,
+        "exact binomial (Clopper-Pearson)", n, "DEM reversal runs (seeds x protocols, pooled across ensembles)",
+        f"through 90: {k}; through 0/180: {against}; unclear: {axes.count('unclear')}; no crossing: "
+        f"{axes.count('none')}", verdict=verdict)
+
+
+def steady_angle_row(steady: dict, boot) -> dict:
+    """Claim 8 (issue 13, part 6): the DEM's steady theta_A lies where Eq. 4 (alpha2 < 0) can reach it, at or below 135 degrees."""
+    cases = sorted(steady)
+    th = np.array([steady[c]["theta_A"] for c in cases])
+    est, lo, hi, n = boot(th)
+    above = [c for c, t in zip(cases, th) if t > STEADY_LIMIT]
+    return _row(
+        "8", "Eq. 4 reaches the DEM's steady fabric angle (theta_A <= 135 degrees for positive shear)",
+        "the paper, Eq. 4 (docs/model.md, 'Steady state')",
+        "mean over seeds of the pre-shear's steady theta_A (last half of its strain, mirrored to positive shear); "
+        "Eq. 4 with alpha2 < 0 has no steady state above 135 degrees", "degrees", STEADY_LIMIT, "<", est, lo, hi,
+        stats.bootstrap_test_name(boot.n_resamples), n, SEED_UNIT,
+        f"seeds above 135 degrees: {', '.join(above) if above else 'none'}")
+
+
+# --------------------------------------------------------------------------- model comparisons (out of sample)
+
+
+def _oos(runs: dict):
+    """Out-of-sample runs that have a DEM curve and both models' curves; and how many lacked a model."""
+    ok, missing = [], 0
+    for key, cur in runs.items():
+        if key[4] or "dem" not in cur:
+            continue
+        if all(m in cur for m in MODELS):
+            ok.append((key, cur))
+        else:
+            missing += 1
+    return ok, missing
+
+
+def _on_dem(cur, model, column):
+    d, m = cur["dem"], cur[model]
+    return np.interp(d["s_rev"].to_numpy(), m["s_rev"].to_numpy(), m[column].to_numpy())
+
+
+def _oos_detail(pairs, missing):
+    sets = sorted({k[0] for k, _ in pairs})
+    return (f"{len(pairs)} out-of-sample runs from sets {', '.join(sets) if sets else 'none'}"
+            + (f"; {missing} run(s) left out: a model could not be integrated" if missing else ""))
+
+
+def early_error_row(runs, claim_id, claim, source, column, label, window, boot) -> dict:
+    """Claims 4 and 7: RMSE over the first ``window`` strain, Model 1 minus Model 2, paired per run."""
+    pairs, missing = _oos(runs)
+    diffs, r = {}, {m: [] for m in MODELS}
+    for key, cur in pairs:
+        s, d = cur["dem"]["s_rev"].to_numpy(), cur["dem"][column].to_numpy()
+        e = {m: measures.early_rmse(s, d, _on_dem(cur, m, column), window) for m in MODELS}
+        for m in MODELS:
+            r[m].append(e[m])
+        diffs.setdefault(key[1], []).append(e["model1"] - e["model2"])
+    _, v = _per_seed(diffs)
+    est, lo, hi, n = boot(v)
+    return _row(
+        claim_id, claim, source,
+        f"RMSE of {label} over the first {window:g} strain after the reversal, Model 1 minus Model 2, out of "
+        f"sample, paired on each run, mean per seed", f"difference of RMSE of {label} (dimensionless)", 0.0, "<",
+        est, lo, hi,
+        "paired " + stats.bootstrap_test_name(boot.n_resamples), n, SEED_UNIT,
+        f"mean RMSE Model 1 {_fmt(np.nanmean(r['model1']) if pairs else math.nan)}, Model 2 "
+        f"{_fmt(np.nanmean(r['model2']) if pairs else math.nan)}; {_oos_detail(pairs, missing)}")
+
+
+def turning_row(runs, boot) -> dict:
+    """Claim 5: Model 2's theta_A turns opposite to the DEM in some runs, Model 1's does not."""
+    pairs, missing = _oos(runs)
+    diffs, count, n_runs = {}, {m: 0 for m in MODELS}, 0
+    for key, cur in pairs:
+        d = cur["dem"]
+        ref = measures.crossing(d["s_rev"].to_numpy(), measures.smooth(d["A_xx"]), measures.smooth(d["A_xy"]),
+                                noisy=True)["axis"]
+        if ref not in ("90", "0/180"):
+            continue
+        n_runs += 1
+        opp = {}
+        for m in MODELS:
+            c = cur[m]
+            ax = measures.crossing(c["s_rev"].to_numpy(), c["A_xx"].to_numpy(), c["A_xy"].to_numpy(),
+                                   noisy=False)["axis"]
+            opp[m] = float(ax in ("90", "0/180") and ax != ref)
+            count[m] += int(opp[m])
+        diffs.setdefault(key[1], []).append(opp["model2"] - opp["model1"])
+    _, v = _per_seed(diffs)
+    est, lo, hi, n = boot(v)
+    return _row(
+        "5", "Model 2's theta_A turns the opposite way in some cases, Model 1's does not", "the paper, Sec. 4",
+        "fraction of runs in which Model 2's theta_A crosses the other axis than the DEM's (sign of A_xx where "
+        "A_xy changes sign) minus the same fraction for Model 1, out of sample, per seed; runs whose DEM crossing "
+        "is unclear are left out", "fraction of runs", 0.0, ">", est, lo, hi,
+        "paired " + stats.bootstrap_test_name(boot.n_resamples), n, SEED_UNIT,
+        f"opposite to the DEM: Model 1 in {count['model1']} of {n_runs} runs, Model 2 in {count['model2']} of "
+        f"{n_runs}; {_oos_detail(pairs, missing)}")
+
+
+def width_row(runs, boot) -> dict:
+    """Claim 6: the sinusoidal transition of theta_A, too sharp in Model 2, closer in Model 1."""
+    pairs, missing = _oos({k: v for k, v in runs.items() if k[3] == "sinusoidal"})
+    diffs, w = {}, {"dem": [], "model1": [], "model2": []}
+    for key, cur in pairs:
+        d = cur["dem"]
+        wd = measures.transition_width(d["s_rev"].to_numpy(), measures.smooth(d["A_xx"]), measures.smooth(d["A_xy"]))
+        wm = {m: measures.transition_width(cur[m]["s_rev"].to_numpy(), cur[m]["A_xx"].to_numpy(),
+                                           cur[m]["A_xy"].to_numpy()) for m in MODELS}
+        w["dem"].append(wd)
+        for m in MODELS:
+            w[m].append(wm[m])
+        diffs.setdefault(key[1], []).append(abs(wm["model1"] - wd) - abs(wm["model2"] - wd))
+    _, v = _per_seed(diffs)
+    est, lo, hi, n = boot(v)
+    mean = {k: np.nanmean(x) if np.isfinite(x).any() else math.nan for k, x in ((k, np.asarray(x, float))
+                                                                               for k, x in w.items())}
+    sharper = int(np.sum(np.asarray(w["model2"]) < np.asarray(w["dem"])))
+    return _row(
+        "6", "the sinusoidal theta_A transition is too sharp in Model 2 and closer to the DEM in Model 1",
+        "the paper, Sec. 4 (Fig. 5)",
+        "transition width of theta_A (strain from 10 % to 90 % of its change), |Model 1 - DEM| minus "
+        "|Model 2 - DEM|, sinusoidal runs out of sample, per seed", "strain", 0.0, "<", est, lo, hi,
+        "paired " + stats.bootstrap_test_name(boot.n_resamples), n, SEED_UNIT,
+        f"mean width DEM {_fmt(mean['dem'])}, Model 1 {_fmt(mean['model1'])}, Model 2 {_fmt(mean['model2'])}; "
+        f"Model 2 sharper than the DEM in {sharper} of {len(pairs)} runs; {_oos_detail(pairs, missing)}")
+
+
+# --------------------------------------------------------------------------- the table
+
+
+class Bootstrap:
+    """``stats.mean_interval`` with the table's resample count and seed."""
+
+    def __init__(self, n_resamples=stats.N_RESAMPLES, seed=0):
+        self.n_resamples, self.seed = n_resamples, seed
+
+    def __call__(self, values):
+        return stats.mean_interval(values, self.n_resamples, self.seed)
+
+
+def eq2_params(params_path):
+    """Eq. 2's coefficients from a calibration's params.yaml (None if the file is absent)."""
+    if params_path is None or not params_path.exists():
+        return None
+    f = load_params(params_path).friction_eq2
+    return dict(X0=f.X0, k1=f.k1, k3=f.k3, k5=f.k5)
+
+
+def claims_table(pred: pd.DataFrame, dem_cases: list, eq2=None, n_resamples=stats.N_RESAMPLES,
+                 seed=0) -> pd.DataFrame:
+    """Every claim's row (``COLUMNS``) from the comparison's curves and the DEM cases.
+
+    Parameters
+    ----------
+    pred : DataFrame
+        ``inputs.read_comparison``.
+    dem_cases : list of inputs.DemCase
+    eq2 : dict, optional
+        Eq. 2's coefficients (``eq2_params``); row 2b is "not computed" without.
+    n_resamples, seed : int
+        Bootstrap resamples and their random seed.
+    """
+    from .inputs import dem_curves, runs as run_curves
+    boot = Bootstrap(n_resamples, seed)
+    steady = {c.label: c.steady for c in dem_cases}
+    dem = dem_curves(pred)
+    runs = run_curves(pred)
+    rows = fall_rows(dem, steady, boot)
+    rows += collapse_rows(dem_cases, eq2, boot)
+    rows.append(passage_row(dem))
+    rows.append(early_error_row(runs, "4", "Model 1 captures the fall of |A| just after the reversal better than "
+                                "Model 2", "the paper, Sec. 4 (Figs. 4, 5)", "A_norm", "|A|", EARLY_A, boot))
+    rows.append(turning_row(runs, boot))
+    rows.append(width_row(runs, boot))
+    rows.append(early_error_row(runs, "7", "Model 1's friction is better at the start of the reversal",
+                                "the paper, Sec. 4 (zoom of Fig. 4c)", "mu", "mu", EARLY_MU, boot))
+    rows.append(steady_angle_row(steady, boot))
+    return pd.DataFrame(rows, columns=COLUMNS)
