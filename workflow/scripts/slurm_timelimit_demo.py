@@ -1,7 +1,7 @@
 """A DEM stage across Slurm time limits: checkpoint on SIGTERM, retry, resume.
 
-Runs one pre-shear of the CI cell, lengthened to ``--strain`` (default 15, about
-3 minutes on one core), through ``profiles/slurm`` with a time limit of
+Runs one pre-shear of the CI cell, lengthened to ``--strain`` (default 30, about
+4.5 minutes on one core), through ``profiles/slurm`` with a time limit of
 ``attempt`` minutes (1, 2, 3, ...), so Slurm stops it at its limit (SIGTERM,
 then SIGKILL after KillWait), the stage writes its checkpoint and exits 4, and
 Snakemake's retry resubmits it with a longer limit; the stage resumes from the
@@ -18,6 +18,7 @@ exit code 1 if the series has a gap or a duplicated row.
 """
 import argparse
 import json
+import re
 import subprocess
 import sys
 import time
@@ -34,7 +35,7 @@ CASE = "p100000_I0.01_s1"
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, required=True, help="results dir (created)")
-    ap.add_argument("--strain", type=float, default=15.0, help="pre-shear strain (default 15)")
+    ap.add_argument("--strain", type=float, default=30.0, help="pre-shear strain (default 30)")
     ap.add_argument("--retries", type=int, default=4)
     args = ap.parse_args(argv)
 
@@ -59,8 +60,7 @@ def main(argv=None):
     print(f"snakemake exit {run.returncode} after {wall:.0f} s (log {out / 'snakemake.log'})")
 
     text = (out / "snakemake.log").read_text()
-    jobs = sorted({int(w.split()[0]) for w in text.split("SLURM jobid ")[1:]
-                   if w.split()[0].rstrip(").,:").isdigit()} if "SLURM jobid " in text else set())
+    jobs = sorted({int(j) for j in re.findall(r"SLURM jobid (\d+)", text)})
     preshear_logs = sorted(logs.glob("rule_dem_preshear/**/*.log"))
     print(f"pre-shear allocations (Slurm logs): {len(preshear_logs)}")
     for log in preshear_logs:
@@ -79,7 +79,7 @@ def main(argv=None):
     spread = (coarse.max() - coarse.min()) / np.median(coarse)
     print(f"rows {len(series)}, strain {strain[0]:.4f} .. {strain[-1]:.4f}, "
           f"coarse row spacing in t: relative spread {spread:.1e}, duplicated rows {duplicated}, gaps {gaps}")
-    print(f"sidecar: samples {side.get('samples')}, jobs {jobs}")
+    print(f"sidecar: samples {side.get('samples')}; Slurm jobs of this run {jobs}")
     return 0 if duplicated == 0 and gaps == 0 and spread < 1e-6 else 1
 
 
