@@ -5,7 +5,7 @@ VENV  := .venv
 PY    := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: setup yade venv quick paper test lint clean
+.PHONY: setup yade venv quick paper test slurm-test lint clean
 
 setup: yade venv
 
@@ -33,6 +33,11 @@ paper: setup
 
 test: setup
 	$(PY) -m pytest -q
+
+# The CI preset through profiles/slurm on a one-node Slurm started here (root;
+# workflow/scripts/slurm_local.sh up/down; about 10 minutes).
+slurm-test: setup
+	RUN_SLURM=1 $(PY) -m pytest -q -s -m slurm tests/test_slurm_profile.py
 
 clean:
 	rm -rf results logs benchmarks .snakemake

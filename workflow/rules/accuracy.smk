@@ -14,6 +14,9 @@ rule ode_work_precision:
             caption="../report/ode_work_precision.rst",
             category="Accuracy and cost",
         ),
+    resources:
+        runtime=COST_ODE_WORK_PRECISION.runtime,
+        mem_mb=COST_ODE_WORK_PRECISION.mem_mb,
     log:
         f"{RESULTS}/logs/accuracy/ode_work_precision.log",
     benchmark:
@@ -30,6 +33,9 @@ rule batched_cost:
             caption="../report/batched_cost.rst",
             category="Accuracy and cost",
         ),
+    resources:
+        runtime=COST_BATCHED_COST.runtime,
+        mem_mb=COST_BATCHED_COST.mem_mb,
     log:
         f"{RESULTS}/logs/accuracy/batched_cost.log",
     benchmark:
@@ -57,6 +63,9 @@ rule calibration_cost:
             for name, spec in config.get("calibration", {}).get("sets", {}).items()
             if "protocols" in spec and set(spec) == {"protocols"}
         ),
+    resources:
+        runtime=COST_CALIBRATION_COST.runtime,
+        mem_mb=COST_CALIBRATION_COST.mem_mb,
     log:
         f"{RESULTS}/logs/accuracy/calibration_cost.log",
     benchmark:
@@ -170,6 +179,9 @@ use rule dem_reversal as dem_study_heaviside with:
     params:
         stage="heaviside",
         case_dir=lambda wc: f"{ACC_DEM}/{wc.point}",
+    resources:
+        runtime=dem_runtime("heaviside"),
+        mem_mb=dem_mem_mb,
     log:
         f"{RESULTS}/logs/accuracy/dem/{{point}}/heaviside.log",
     benchmark:
@@ -223,6 +235,9 @@ rule dem_study:
         heaviside_strain=ACCURACY.get("heaviside_strain", 0.4),
         transient_bin=ACCURACY.get("transient_bin", 0.01),
         quasi_static_tolerance=ACCURACY.get("quasi_static_tolerance", 0.05),
+    resources:
+        runtime=COST_DEM_STUDY_ANALYSIS.runtime,
+        mem_mb=COST_DEM_STUDY_ANALYSIS.mem_mb,
     log:
         f"{RESULTS}/logs/accuracy/dem_study.log",
     benchmark:

@@ -62,6 +62,9 @@ rule calibrate:
         protocols=lambda wc: CALIBRATION_SETS[wc.calset]["protocols"],
         options=config.get("calibration", {}).get("options", ""),
         out=lambda wc: f"{RESULTS}/calibration/{wc.calset}",
+    resources:
+        runtime=COST_CALIBRATE.runtime,
+        mem_mb=COST_CALIBRATE.mem_mb,
     log:
         f"{RESULTS}/logs/calibration/{{calset}}.log",
     benchmark:

@@ -59,6 +59,9 @@ rule compare_predict:
         train_protocols=lambda wc: CALIBRATION_SETS[wc.calset]["protocols"],
         out=lambda wc: f"{COMPARE}/{wc.calset}",
         options=config.get("compare", {}).get("options", ""),
+    resources:
+        runtime=COST_COMPARE.runtime,
+        mem_mb=COST_COMPARE.mem_mb,
     log:
         f"{RESULTS}/logs/compare/predict_{{calset}}.log",
     benchmark:
@@ -79,6 +82,9 @@ rule compare_heldout:
             caption="../report/heldout_errors.rst",
             category=COMPARE_CATEGORY,
         ),
+    resources:
+        runtime=COST_SMALL.runtime,
+        mem_mb=COST_SMALL.mem_mb,
     log:
         f"{RESULTS}/logs/compare/heldout.log",
     benchmark:
@@ -109,6 +115,9 @@ rule compare_sensitivity:
         dirs=[case_dir(label) for label in CASES],
         protocols=[p for p in PROTOCOLS if p in COMPARE_FIGURES],
         out=f"{COMPARE}/{SENSITIVITY_SET}",
+    resources:
+        runtime=COST_COMPARE.runtime,
+        mem_mb=COST_COMPARE.mem_mb,
     log:
         f"{RESULTS}/logs/compare/sensitivity_{SENSITIVITY_SET}.log",
     benchmark:

@@ -48,6 +48,9 @@ rule dem_pack:
     params:
         stage="pack",
         case_dir=lambda wc: case_dir(wc.case),
+    resources:
+        runtime=dem_runtime("pack"),
+        mem_mb=dem_mem_mb,
     log:
         f"{RESULTS}/logs/dem/{{case}}/pack.log",
     benchmark:
@@ -68,6 +71,9 @@ rule dem_preshear:
     params:
         stage="preshear",
         case_dir=lambda wc: case_dir(wc.case),
+    resources:
+        runtime=dem_runtime("preshear"),
+        mem_mb=dem_mem_mb,
     log:
         f"{RESULTS}/logs/dem/{{case}}/preshear.log",
     benchmark:
@@ -88,6 +94,9 @@ rule dem_reversal:
     params:
         stage=lambda wc: wc.protocol,
         case_dir=lambda wc: case_dir(wc.case),
+    resources:
+        runtime=dem_runtime(),
+        mem_mb=dem_mem_mb,
     log:
         f"{RESULTS}/logs/dem/{{case}}/{{protocol}}.log",
     benchmark:
@@ -113,6 +122,9 @@ rule dem_summary:
         ),
     params:
         cases=CASES,
+    resources:
+        runtime=COST_SMALL.runtime,
+        mem_mb=COST_SMALL.mem_mb,
     log:
         f"{RESULTS}/logs/dem/summary.log",
     benchmark:

@@ -1,0 +1,95 @@
+"""The SLURM profile: every job gets a runtime and memory, also with the README's command line.
+
+The dry runs here touch no cluster (``-n``: Snakemake's dry-run executor).
+``test_ci_preset_runs_through_a_local_slurm`` runs the CI preset on a real
+one-node Slurm (workflow/scripts/slurm_local.sh) and is opt-in: marker
+``slurm``, run with ``RUN_SLURM=1 .venv/bin/python -m pytest -m slurm``
+(root, about 10 minutes).
+"""
+import os
+import re
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+SNAKEMAKE = [sys.executable, "-m", "snakemake"]
+README_ARGS = ["--default-resources", "slurm_account=ACCOUNT", "slurm_partition=PARTITION"]
+LOCAL_RULES = {"all", "scene", "dem_study_scene", "dem_study_points"}
+
+
+def planned_resources(*args):
+    """rule -> list of resource dicts, one per planned job, from a dry run."""
+    result = subprocess.run(
+        [*SNAKEMAKE, "-n", "--profile", "profiles/slurm", "--forceall", *args],
+        cwd=ROOT, capture_output=True, text=True, timeout=300,
+    )
+    assert result.returncode == 0, result.stderr[-3000:]
+    jobs, rule = {}, None
+    for line in (result.stdout + result.stderr).splitlines():
+        if m := re.match(r"^(?:local)?rule (\w+):", line):
+            rule = m.group(1)
+            jobs.setdefault(rule, [])
+        elif rule and (m := re.match(r"^\s+resources: (.*)$", line)):
+            jobs[rule].append(dict(kv.split("=", 1) for kv in m.group(1).split(", ")))
+    return jobs
+
+
+@pytest.mark.parametrize("extra", [[], README_ARGS], ids=["profile", "readme-command"])
+def test_every_cluster_job_gets_a_runtime_and_memory(extra):
+    jobs = planned_resources(*extra)
+    assert "dem_preshear" in jobs and "dem_study_preshear" in jobs, sorted(jobs)
+    for rule, planned in jobs.items():
+        if rule in LOCAL_RULES:
+            continue
+        for res in planned:
+            assert int(res.get("runtime", 0)) > 0 and int(res.get("mem_mb", 0)) >= 1000, (rule, res)
+    if extra:
+        assert all(res["slurm_account"] == "ACCOUNT" for res in jobs["dem_preshear"])
+
+
+def test_dem_runtime_follows_the_scene_not_a_flat_default():
+    jobs = planned_resources()
+    preshear = [int(res["runtime"]) for res in jobs["dem_preshear"]]
+    # the paper cell: about 5,000 disks, 2.1 h per unit strain, a 2-strain pre-shear: 4 h x 3
+    assert min(preshear) > 8 * 60, preshear
+    study = sorted(int(res["runtime"]) for res in jobs["dem_study_preshear"])
+    assert study[0] < study[-1] / 5, study  # the study's cheap and dear points differ
+
+
+RUN_SLURM = os.environ.get("RUN_SLURM") == "1"
+
+
+@pytest.mark.slurm
+@pytest.mark.skipif(not RUN_SLURM, reason="opt-in: RUN_SLURM=1 (root; installs and starts a local Slurm)")
+def test_ci_preset_runs_through_a_local_slurm(tmp_path):
+    script = ROOT / "workflow/scripts/slurm_local.sh"
+    was_up = subprocess.run([script, "status"], capture_output=True, text=True).stdout.startswith(
+        "slurmctld: running")
+    if not was_up:
+        subprocess.run([script, "up"], check=True, timeout=900)
+    results = tmp_path / "results"
+    smk = [*SNAKEMAKE, "--configfile", "config/ci.yaml", "--config", f"results_dir={results}"]
+    try:
+        t0 = time.monotonic()
+        run = subprocess.run([*smk, "--profile", "profiles/slurm", "--slurm-logdir", str(tmp_path / "slurm")],
+                             cwd=ROOT, capture_output=True, text=True, timeout=3600)
+        wall = time.monotonic() - t0
+        assert run.returncode == 0, run.stderr[-4000:]
+        print(f"CI preset through the local Slurm: {wall:.0f} s")
+        subprocess.run([*smk, "--report", str(results / "report.html")], cwd=ROOT, check=True, timeout=600)
+        summary = subprocess.run([*smk, "--summary"], cwd=ROOT, capture_output=True, text=True, check=True)
+        (results / "summary.tsv").write_text(summary.stdout)
+        check = subprocess.run(
+            [sys.executable, "workflow/scripts/check_outputs.py", results / "summary.tsv",
+             results / "report.html", "--results", results],
+            cwd=ROOT, capture_output=True, text=True)
+        assert check.returncode == 0, check.stdout[-3000:] + check.stderr[-3000:]
+    finally:
+        if not was_up:
+            subprocess.run([script, "down"], check=False)
+        shutil.rmtree(ROOT / ".snakemake" / "slurm_logs", ignore_errors=True)

@@ -1,0 +1,97 @@
+# Runtime (minutes) and memory (MB) of every rule, for a cluster (profiles/slurm)
+# and anywhere else resources are enforced. Each rule sets its own, so a
+# `--default-resources ...` on the command line (which replaces the profile's
+# whole default-resources block) cannot strip them.
+#
+# DEM stages: from the scene's projected particle-steps and the measured
+# one-thread throughput (dem_study/grid.py: THROUGHPUT, steps_per_strain,
+# PACK_TIME, n_disks),
+#     seconds = N * steps / throughput(N),
+#     steps   = sqrt(4 kappa/pi) / (I dt_over_tc) * strain     (shear stages)
+#             = PACK_TIME * sqrt(4 kappa/pi) / dt_over_tc       (pack),
+#     runtime = ceil(attempt * (DEM_SAFETY * seconds / 60 + DEM_OVERHEAD_MIN)).
+# Measured on the quick preset (496 disks, two YADE jobs on 2 shared cores): the
+# stages took 0.7-2.1 times this estimate; DEM_SAFETY = 3 covers that and a
+# slower node. A stage stopped at its limit checkpoints and exits (docs/scene.md);
+# Snakemake's retry (profile `retries`) resubmits it with `attempt` + 1, so a
+# longer limit, and it resumes from the checkpoint.
+# Memory: 253 MB peak RSS measured at 496 disks (YADE + Python); taken as
+# 250 MB + 50 kB per disk, times DEM_MEM_SAFETY, at least 1000 MB.
+import math
+from collections import namedtuple
+
+from dem_study import grid as _grid
+
+DEM_SAFETY = 3.0
+DEM_OVERHEAD_MIN = 2.0  # YADE start, loading a state, writing outputs
+DEM_MEM_SAFETY = 2.0
+
+
+def _scene_of(wc):
+    """The scene dict of a DEM job: a campaign case or a DEM-study point."""
+    if "case" in wc.keys():
+        return case_scene(wc.case)
+    return point_scene(wc.point)
+
+
+def dem_seconds(scene, stage):
+    """Projected one-thread seconds of one DEM stage of ``scene`` (see the header)."""
+    mat, geo = scene["material"], scene["geometry"]
+    n = _grid.n_disks(geo["H_over_d"], geo["W_over_H"],
+                      guess=scene.get("pack", {}).get("solid_fraction_guess", 0.8),
+                      size_min=mat["size_ratio_min"], size_max=mat["size_ratio_max"])
+    dt_over_tc = scene["timestep"]["dt_over_tc"]
+    if stage == "pack":
+        steps = _grid.PACK_TIME * math.sqrt(4 * mat["kappa"] / math.pi) / dt_over_tc
+    else:
+        steps = _grid.steps_per_strain(mat["kappa"], scene["loading"]["inertial_number"], dt_over_tc)
+        steps *= scene[stage]["strain"]
+    return n * steps / _grid.throughput(n)
+
+
+def dem_runtime(stage=None):
+    """A resources function: minutes for the stage, growing with ``attempt``."""
+
+    def runtime(wc, attempt):
+        name = stage or wc.protocol
+        minutes = DEM_SAFETY * dem_seconds(_scene_of(wc), name) / 60 + DEM_OVERHEAD_MIN
+        return math.ceil(attempt * minutes)
+
+    return runtime
+
+
+def dem_mem_mb(wc):
+    scene = _scene_of(wc)
+    mat, geo = scene["material"], scene["geometry"]
+    n = _grid.n_disks(geo["H_over_d"], geo["W_over_H"],
+                      size_min=mat["size_ratio_min"], size_max=mat["size_ratio_max"])
+    return max(1000, math.ceil(DEM_MEM_SAFETY * (250 + 0.05 * n)))
+
+
+# The other rules: measured wall time and peak RSS on the CI preset (3 cases x
+# 3 series, 2 shared cores; benchmarks/*.tsv), times 4 in time and 2 in memory,
+# per attempt, with a floor. Calibration and comparison grow with the number of
+# series (cases x (pre-shear + protocols)), so their time is scaled by it; the
+# CI preset also runs them with lighter options (fewer bootstrap fits), hence
+# their larger floors.
+Cost = namedtuple("Cost", "runtime mem_mb")
+
+
+def measured(seconds, mem_mb, floor_min=10, per_series=False):
+    """Cost(runtime function of attempt, mem_mb) from one measured run (see above)."""
+
+    def runtime(wc, attempt):
+        scale = max(1.0, len(CASES) * (1 + len(PROTOCOLS)) / 9) if per_series else 1.0
+        return math.ceil(attempt * max(floor_min, 4 * seconds / 60 * scale))
+
+    return Cost(runtime, max(1000, math.ceil(2 * mem_mb)))
+
+
+#                          measured: s, peak MB (CI preset)
+COST_SMALL = measured(3.5, 145)  # dem_summary, compare_heldout
+COST_ODE_WORK_PRECISION = measured(30.4, 129)
+COST_BATCHED_COST = measured(74.0, 266)  # quick preset
+COST_CALIBRATE = measured(18.3, 229, floor_min=120, per_series=True)
+COST_CALIBRATION_COST = measured(2 * 18.3, 229, floor_min=240, per_series=True)  # two calibrations per set
+COST_COMPARE = measured(14.6, 203, floor_min=30, per_series=True)
+COST_DEM_STUDY_ANALYSIS = measured(30.0, 500, floor_min=30)  # not benchmarked here: a guess, like SMALL x 10
