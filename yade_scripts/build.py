@@ -71,14 +71,18 @@ def set_disk(body, radius, rho, depth):
     body.state.inertia = Vector3(1, 1, 1) * (0.5 * mass * radius**2)
 
 
-def loose_placement(rnd, diameters, W, y_lo, y_hi):
-    """Random sequential placement of non-overlapping disks, periodic in x.
+def loose_placement(rnd, diameters, W, y_lo, y_hi, periodic_y=False):
+    """Random sequential placement of non-overlapping disks, periodic in x (and in y if ``periodic_y``).
 
-    Centres in [0, W) x [y_lo + r, y_hi - r]. Returns a list of (x, y).
+    Centres in [0, W) x [y_lo + r, y_hi - r] between walls, or in [0, W) x [y_lo, y_hi)
+    in a box periodic in y too. Returns a list of (x, y).
     """
     cell = max(diameters)
     nx = max(1, int(W // cell))
     cw = W / nx
+    Hc = y_hi - y_lo
+    ny = max(1, int(Hc // cell)) if periodic_y else None
+    ch = Hc / ny if periodic_y else cell
     grid = {}
     pos = [None] * len(diameters)
     # largest first: random sequential placement then reaches denser loose states
@@ -87,16 +91,21 @@ def loose_placement(rnd, diameters, W, y_lo, y_hi):
         r = D / 2
         for _ in range(20000):
             x = rnd.uniform(0, W)
-            y = rnd.uniform(y_lo + r, y_hi - r)
-            ix, iy = int(x // cw) % nx, int((y - y_lo) // cell)
+            y = rnd.uniform(y_lo, y_hi) if periodic_y else rnd.uniform(y_lo + r, y_hi - r)
+            ix, iy = int(x // cw) % nx, int((y - y_lo) // ch)
+            if periodic_y:
+                iy %= ny
             ok = True
             for jx in (ix - 1, ix, ix + 1):
                 for jy in (iy - 1, iy, iy + 1):
-                    for j in grid.get((jx % nx, jy), ()):  # noqa: B007
+                    for j in grid.get((jx % nx, jy % ny if periodic_y else jy), ()):  # noqa: B007
                         xj, yj = pos[j]
                         dx = x - xj
                         dx -= W * round(dx / W)
-                        if dx * dx + (y - yj) ** 2 < (r + diameters[j] / 2) ** 2:
+                        dy = y - yj
+                        if periodic_y:
+                            dy -= Hc * round(dy / Hc)
+                        if dx * dx + dy ** 2 < (r + diameters[j] / 2) ** 2:
                             ok = False
                             break
                     if not ok:
@@ -185,40 +194,6 @@ def set_wall_speeds(lay, u_top, u_bottom):
         O.bodies[i].state.vel = Vector3(u_bottom, 0, 0)
 
 
-def periodic_placement(rnd, diameters, W, Hc):
-    """Random sequential placement of non-overlapping disks in a W x Hc box periodic in x and y."""
-    cell = max(diameters)
-    nx, ny = max(1, int(W // cell)), max(1, int(Hc // cell))
-    cw, ch = W / nx, Hc / ny
-    grid, pos = {}, [None] * len(diameters)
-    for i in sorted(range(len(diameters)), key=lambda k: -diameters[k]):
-        r = diameters[i] / 2
-        for _ in range(20000):
-            x, y = rnd.uniform(0, W), rnd.uniform(0, Hc)
-            ix, iy = int(x // cw) % nx, int(y // ch) % ny
-            ok = True
-            for jx in (ix - 1, ix, ix + 1):
-                for jy in (iy - 1, iy, iy + 1):
-                    for j in grid.get((jx % nx, jy % ny), ()):
-                        dx, dy = x - pos[j][0], y - pos[j][1]
-                        dx -= W * round(dx / W)
-                        dy -= Hc * round(dy / Hc)
-                        if dx * dx + dy * dy < (r + diameters[j] / 2) ** 2:
-                            ok = False
-                            break
-                    if not ok:
-                        break
-                if not ok:
-                    break
-            if ok:
-                grid.setdefault((ix, iy), []).append(i)
-                pos[i] = (x, y)
-                break
-        else:
-            raise PlacementError("loose placement failed: lower pack.initial_solid_fraction")
-    return pos
-
-
 def new_periodic_cell(scene, der):
     """Create the loose periodic cell of the pack stage (cell.kind = periodic). Returns the layout dict.
 
@@ -237,7 +212,7 @@ def new_periodic_cell(scene, der):
     O.periodic = True
     O.cell.setBox(W, H0, 4 * d * m["size_ratio_max"])
     O.cell.homoDeform = 2  # Lees-Edwards: particle velocities follow changes of velGrad
-    pos = periodic_placement(rnd, diam, W, H0)
+    pos = loose_placement(rnd, diam, W, 0.0, H0, periodic_y=True)
     grains = []
     for (x, y), D in zip(pos, diam):
         b = utils.sphere(Vector3(x, y, 0), D / 2, material=contact_material(scene, D / 2))
