@@ -9,35 +9,18 @@ import shutil
 import signal
 import subprocess
 import time
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
-YS = ROOT / "yade_scripts"
-RUN = YS / "run_stage.py"
+from tests.test_dem_stages import RUN, read, yade
+from tests.test_dem_stages import make_scene as make_stage_scene
+
 pytestmark = pytest.mark.yade
 
 
 def make_scene():
-    sc = json.loads((YS / "examples" / "tiny_periodic.json").read_text())
-    sc["pack"].update(initial_solid_fraction=0.45, ke_max=1e-6, ramp_time=10)
-    sc["preshear"]["strain"] = 1.2
-    sc["heaviside"]["strain"] = 0.4
-    sc["sinusoidal"].update(strain=0.3, transition_strain=0.1)
-    sc["run"].update(checkpoint_every_s=1000, progress_every_s=5)
-    return sc
-
-
-def yade(*args, timeout=600):
-    env = dict(os.environ, OMP_NUM_THREADS="1")
-    return subprocess.run(["yade", "-n", "-x", *map(str, args)], capture_output=True, text=True,
-                          timeout=timeout, env=env)
-
-
-def read(path):
-    return np.genfromtxt(path, delimiter=",", names=True)
+    return make_stage_scene("tiny_periodic.json")
 
 
 @pytest.fixture(scope="module")

@@ -25,8 +25,9 @@ COLUMNS = ["t", "strain", "gammadot", "U_top", "U_bottom", "gap", "A_xx", "A_xy"
            "p", "mu", "sigma_xy_bulk", "p_bulk", "phi", "Z", "inertial_number"]
 
 
-def make_scene():
-    sc = json.loads((YS / "examples" / "tiny.json").read_text())
+def make_scene(example="tiny.json"):
+    """A tiny example scene of yade_scripts/examples/ with short stages (a few seconds each)."""
+    sc = json.loads((YS / "examples" / example).read_text())
     sc["pack"].update(initial_solid_fraction=0.45, ke_max=1e-6, ramp_time=10)
     sc["preshear"]["strain"] = 1.2
     sc["heaviside"]["strain"] = 0.4
