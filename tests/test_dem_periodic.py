@@ -4,16 +4,12 @@ The cell: W = H = 16 d (about 240 disks, periodic in x and y), kappa = 1e3, I = 
 One module fixture runs pack -> preshear -> heaviside, sinusoidal once.
 """
 import json
-import os
 import shutil
-import signal
-import subprocess
-import time
 
 import numpy as np
 import pytest
 
-from tests.test_dem_stages import RUN, read, yade
+from tests.test_dem_stages import RUN, kill_preshear_after_first_checkpoint, read, yade
 from tests.test_dem_stages import make_scene as make_stage_scene
 
 pytestmark = pytest.mark.yade
@@ -98,23 +94,7 @@ def test_killed_periodic_stage_resumes_without_gap_or_duplicate(case, tmp_path):
     sc["run"]["checkpoint_every_s"] = 1
     scene = tmp_path / "scene.json"
     scene.write_text(json.dumps(sc))
-    resume = cdir / ".partial" / "preshear" / "resume.json"
-    env = dict(os.environ, OMP_NUM_THREADS="1")
-    proc = subprocess.Popen(["yade", "-n", "-x", str(RUN), str(scene), "preshear", str(cdir)],
-                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
-    try:
-        t0 = time.time()
-        while not resume.exists():
-            assert proc.poll() is None, "the stage ended before its first checkpoint"
-            assert time.time() - t0 < 120
-            time.sleep(0.1)
-        time.sleep(0.7)  # rows past the checkpoint get written, then are lost with the kill
-        assert proc.poll() is None, "the stage ended before it could be killed"
-        proc.send_signal(signal.SIGKILL)
-        proc.wait()
-    finally:
-        if proc.poll() is None:
-            proc.kill()
+    kill_preshear_after_first_checkpoint(scene, cdir)
     r = yade(RUN, scene, "preshear", cdir)
     assert r.returncode == 0, r.stderr[-2000:]
     assert "resumed from" in r.stdout

@@ -206,9 +206,9 @@ def test_guards_stop_the_run(case, tmp_path, guard, match):
     assert not (cdir / "preshear.csv").exists()  # no half outputs
 
 
-def test_killed_stage_resumes_without_gap_or_duplicate(case, tmp_path):
-    scene, cdir = _case_from_pack(case, tmp_path, preshear=dict(strain=2.5), run=dict(checkpoint_every_s=1))
-    resume = cdir / ".partial" / "preshear" / "resume.json"
+def kill_preshear_after_first_checkpoint(scene, cdir):
+    """Start the pre-shear of ``cdir``, SIGKILL it 0.7 s after its first checkpoint; return its PID."""
+    resume = Path(cdir) / ".partial" / "preshear" / "resume.json"
     env = dict(os.environ, OMP_NUM_THREADS="1")
     proc = subprocess.Popen(["yade", "-n", "-x", str(RUN), str(scene), "preshear", str(cdir)],
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
@@ -225,11 +225,17 @@ def test_killed_stage_resumes_without_gap_or_duplicate(case, tmp_path):
     finally:
         if proc.poll() is None:
             proc.kill()
+    return proc.pid
+
+
+def test_killed_stage_resumes_without_gap_or_duplicate(case, tmp_path):
+    scene, cdir = _case_from_pack(case, tmp_path, preshear=dict(strain=2.5), run=dict(checkpoint_every_s=1))
+    pid = kill_preshear_after_first_checkpoint(scene, cdir)
     assert not (cdir / "preshear.csv").exists()
     r = yade(RUN, scene, "preshear", cdir)
     assert r.returncode == 0, r.stderr[-2000:]
     assert "resumed from" in r.stdout
-    assert f"stale lock of PID {proc.pid} on host" in r.stdout  # SIGKILL left the lock file behind
+    assert f"stale lock of PID {pid} on host" in r.stdout  # SIGKILL left the lock file behind
     side = json.loads((cdir / "preshear.json").read_text())
     assert side["resumed"] == 1
     s = read(cdir / "preshear.csv")

@@ -121,6 +121,14 @@ def loose_placement(rnd, diameters, W, y_lo, y_hi, periodic_y=False):
     return pos
 
 
+def seeded_diameters(scene, der):
+    """The scene's random stream (seeded by ``seed``) and the N disk diameters drawn first from it,
+    uniform in [size_ratio_min, size_ratio_max] d; the stream goes on to place them."""
+    m = scene["material"]
+    rnd = random.Random(scene["seed"])
+    return rnd, [der["d"] * rnd.uniform(m["size_ratio_min"], m["size_ratio_max"]) for _ in range(der["N"])]
+
+
 def new_cell(scene, der):
     """Create the loose cell of the pack stage. Returns the layout dict."""
     if scene["cell"]["kind"] == "periodic":
@@ -128,9 +136,8 @@ def new_cell(scene, der):
     O.reset()
     d, rho, W, H = der["d"], der["rho"], der["W"], der["H"]
     m, pk = scene["material"], scene["pack"]
-    rnd = random.Random(scene["seed"])
-    N = der["N"]
-    diam = [d * rnd.uniform(m["size_ratio_min"], m["size_ratio_max"]) for _ in range(N)]
+    rnd, diam = seeded_diameters(scene, der)
+    N = len(diam)
     # initial gap: the loose placement at initial_solid_fraction
     H0 = d + (H - d) * pk["solid_fraction_guess"] / pk["initial_solid_fraction"]
     y_bottom = 2 * d
@@ -205,9 +212,8 @@ def new_periodic_cell(scene, der):
     O.reset()
     d, rho, W, H = der["d"], der["rho"], der["W"], der["H"]
     m, pk = scene["material"], scene["pack"]
-    rnd = random.Random(scene["seed"])
-    N = der["N"]
-    diam = [d * rnd.uniform(m["size_ratio_min"], m["size_ratio_max"]) for _ in range(N)]
+    rnd, diam = seeded_diameters(scene, der)
+    N = len(diam)
     H0 = H * pk["solid_fraction_guess"] / pk["initial_solid_fraction"]
     O.periodic = True
     O.cell.setBox(W, H0, 4 * d * m["size_ratio_max"])
