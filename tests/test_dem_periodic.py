@@ -9,7 +9,7 @@ import shutil
 import numpy as np
 import pytest
 
-from tests.test_dem_stages import RUN, kill_preshear_after_first_checkpoint, read, yade
+from tests.test_dem_stages import RUN, kill_preshear_after_first_checkpoint, read, run_all_stages, yade
 from tests.test_dem_stages import make_scene as make_stage_scene
 
 pytestmark = pytest.mark.yade
@@ -21,14 +21,7 @@ def make_scene():
 
 @pytest.fixture(scope="module")
 def case(tmp_path_factory):
-    root = tmp_path_factory.mktemp("periodic")
-    scene = root / "scene.json"
-    scene.write_text(json.dumps(make_scene()))
-    cdir = root / "case"
-    for stage in ("pack", "preshear", "heaviside", "sinusoidal"):
-        r = yade(RUN, scene, stage, cdir)
-        assert r.returncode == 0, f"{stage}: {r.stdout[-2000:]}\n{r.stderr[-2000:]}"
-    return dict(dir=cdir, scene=scene, root=root)
+    return run_all_stages(tmp_path_factory.mktemp("periodic"), make_scene())
 
 
 def test_periodic_stages_write_the_contract(case):

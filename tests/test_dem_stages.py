@@ -50,16 +50,20 @@ def fabric(a, b):
     return fabric_norm(a, b), fabric_angle_deg(a, b)
 
 
-@pytest.fixture(scope="module")
-def case(tmp_path_factory):
-    root = tmp_path_factory.mktemp("dem")
+def run_all_stages(root, sc):
+    """Write the scene ``sc`` under ``root`` and run pack, preshear, heaviside, sinusoidal in ``root/case``."""
     scene = root / "scene.json"
-    scene.write_text(json.dumps(make_scene()))
+    scene.write_text(json.dumps(sc))
     cdir = root / "case"
     for stage in ("pack", "preshear", "heaviside", "sinusoidal"):
         r = yade(RUN, scene, stage, cdir)
         assert r.returncode == 0, f"{stage}: {r.stdout[-2000:]}\n{r.stderr[-2000:]}"
     return dict(dir=cdir, scene=scene, root=root)
+
+
+@pytest.fixture(scope="module")
+def case(tmp_path_factory):
+    return run_all_stages(tmp_path_factory.mktemp("dem"), make_scene())
 
 
 @pytest.mark.parametrize("stage", ["pack", "preshear", "heaviside", "sinusoidal"])

@@ -14,6 +14,8 @@ from pathlib import Path
 import pytest
 import yaml
 
+from tests.test_dem_study_workflow import counts as job_counts
+
 ROOT = Path(__file__).resolve().parents[1]
 SNAKEMAKE = [sys.executable, "-m", "snakemake"]
 DEM_RULES = {"scene", "dem_pack", "dem_preshear", "dem_reversal"}
@@ -43,13 +45,6 @@ def write(config, path):
     return path
 
 
-def job_counts(stdout):
-    counts = {}
-    for line in stdout.splitlines():
-        parts = line.split()
-        if len(parts) == 2 and parts[1].isdigit():
-            counts[parts[0]] = int(parts[1])
-    return counts
 
 
 @pytest.fixture(scope="module")

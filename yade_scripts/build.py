@@ -121,6 +121,17 @@ def loose_placement(rnd, diameters, W, y_lo, y_hi, periodic_y=False):
     return pos
 
 
+def add_disks(scene, positions, diameters, rho, d):
+    """Add the disks (held in the plane, masses and inertias of disks) to O.bodies; return their ids."""
+    grains = []
+    for (x, y), D in zip(positions, diameters):
+        b = utils.sphere(Vector3(x, y, 0), D / 2, material=contact_material(scene, D / 2))
+        set_disk(b, D / 2, rho, d)
+        b.state.blockedDOFs = "zXY"
+        grains.append(O.bodies.append(b))
+    return grains
+
+
 def seeded_diameters(scene, der):
     """The scene's random stream (seeded by ``seed``) and the N disk diameters drawn first from it,
     uniform in [size_ratio_min, size_ratio_max] d; the stream goes on to place them."""
@@ -145,12 +156,7 @@ def new_cell(scene, der):
     O.periodic = True
     O.cell.setBox(W, y_top + 4 * d + 2 * H0, 4 * d * m["size_ratio_max"])
     pos = loose_placement(rnd, diam, W, y_bottom + d / 2, y_top - d / 2)
-    grains = []
-    for (x, y), D in zip(pos, diam):
-        b = utils.sphere(Vector3(x, y, 0), D / 2, material=contact_material(scene, D / 2))
-        set_disk(b, D / 2, rho, d)
-        b.state.blockedDOFs = "zXY"
-        grains.append(O.bodies.append(b))
+    grains = add_disks(scene, pos, diam, rho, d)
     n_w = der["n_wall"]
     s = W / n_w
     wall_mat = contact_material(scene, d / 2)
@@ -219,12 +225,7 @@ def new_periodic_cell(scene, der):
     O.cell.setBox(W, H0, 4 * d * m["size_ratio_max"])
     O.cell.homoDeform = 2  # Lees-Edwards: particle velocities follow changes of velGrad
     pos = loose_placement(rnd, diam, W, 0.0, H0, periodic_y=True)
-    grains = []
-    for (x, y), D in zip(pos, diam):
-        b = utils.sphere(Vector3(x, y, 0), D / 2, material=contact_material(scene, D / 2))
-        set_disk(b, D / 2, rho, d)
-        b.state.blockedDOFs = "zXY"
-        grains.append(O.bodies.append(b))
+    grains = add_disks(scene, pos, diam, rho, d)
     assert grains == list(range(N)), "grains must have ids 0..N-1"
     lay = dict(kind="periodic", N=N, grains=[0, N], n_wall=0, d=d, W=W, H=H, area=sum(math.pi * D * D / 4 for D in diam),
                x_shift=0.0)
