@@ -33,6 +33,9 @@ rule claims:
         dirs=[case_dir(label) for label in CASES],
         sets=list(CALIBRATION_SETS),
         resamples=CLAIMS_RESAMPLES,
+    resources:
+        runtime=COST_CLAIMS.runtime,
+        mem_mb=COST_CLAIMS.mem_mb,
     log:
         f"{RESULTS}/logs/claims/claims.log",
     benchmark:

@@ -94,4 +94,5 @@ COST_BATCHED_COST = measured(74.0, 266)  # quick preset
 COST_CALIBRATE = measured(18.3, 229, floor_min=120, per_series=True)
 COST_CALIBRATION_COST = measured(2 * 18.3, 229, floor_min=240, per_series=True)  # two calibrations per set
 COST_COMPARE = measured(14.6, 203, floor_min=30, per_series=True)
+COST_CLAIMS = measured(7.9, 197, per_series=True)  # quick preset (12 reversal runs)
 COST_DEM_STUDY_ANALYSIS = measured(30.0, 500, floor_min=30)  # not benchmarked here: a guess, like SMALL x 10
