@@ -599,6 +599,19 @@ def simulate_batch(params, histories, model="model1", A0=None, friction="eq2", s
         different lengths (the message names the argument). Per-trajectory failures of
         the integration are never raised: they are in ``status`` and ``errors``.
     """
+    lists, n = _per_trajectory_lists(params, histories, model, A0, friction, strain_eval, t_eval)
+    _check_options(rtol, atol, h_min, fallback_method)
+    P, coef, fric, A0s, lays, errors = _batch_inputs(lists, n, points_per_strain)
+    poff, rows, ooff, out_piece = _offsets(lays)
+    solver = _integrate_batch(coef, A0s, lays, poff, rows, ooff, out_piece, rtol, atol, h_min, max_steps)
+    cols, traj, code = _batch_table(solver, lays, lists["friction"], coef, fric, rows, out_piece, n)
+    fallback = dict(method=fallback_method, rtol=fallback_rtol, atol=fallback_atol, max_steps=fallback_max_steps)
+    _fall_back(code, errors, cols, solver, lists, P, A0s, poff, rows, points_per_strain, fallback)
+    return _batch_result(cols, traj, rows, code, errors, solver.steps, n)
+
+
+def _per_trajectory_lists(params, histories, model, A0, friction, strain_eval, t_eval):
+    """The per-trajectory arguments as lists of N (a single value broadcast), and N; ValueError if lengths differ."""
     seqs = {"params": (params, lambda v: not isinstance(v, (list, tuple))),
             "histories": (histories, lambda v: isinstance(v, History)),
             "model": (model, lambda v: isinstance(v, str)),
@@ -610,13 +623,27 @@ def simulate_batch(params, histories, model="model1", A0=None, friction="eq2", s
     n = next(iter(sizes.values())) if sizes else 1
     if n == 0:
         raise ValueError("the batch is empty")
-    lists = {k: _per_trajectory(k, v, n, single) for k, (v, single) in seqs.items()}
+    return {k: _per_trajectory(k, v, n, single) for k, (v, single) in seqs.items()}, n
+
+
+def _check_options(rtol, atol, h_min, fallback_method):
+    """ValueError, naming the option, for tolerances outside (0, 1) or an unknown fallback method."""
     for name, v in (("rtol", rtol), ("atol", atol), ("h_min", h_min)):
         if not (math.isfinite(v) and 0.0 < v < 1.0):
             raise ValueError(f"{name} = {v!r} is outside the allowed range (0, 1)")
     if fallback_method not in METHODS or fallback_method == "RK4":
         raise ValueError(f"fallback_method = {fallback_method!r} is not one of {METHODS[1:]}")
 
+
+def _batch_inputs(lists, n, points_per_strain):
+    """Per trajectory: parameters, coefficient and friction rows, A0, report layout, and A0's error if any.
+
+    Returns ``(P, coef, fric, A0s, lays, errors)``: lists of N ``ModelParams`` and
+    ``_Layout``, arrays (N, 7), (N, 4) and (N, 2), and N errors (the ``ValueError`` of a
+    trajectory with no stable steady state to start from, whose A0 is then 0; else None).
+    Parameters, layouts and steady states shared by several trajectories are built once.
+    Raises ValueError, naming the trajectory, for an unknown model or friction.
+    """
     p_cache, lay_cache, a0_cache = {}, {}, {}
     P, coef, fric, A0s, lays, errors = [], np.empty((n, 7)), np.empty((n, 4)), np.empty((n, 2)), [], [None] * n
     for i in range(n):
@@ -652,21 +679,47 @@ def simulate_batch(params, histories, model="model1", A0=None, friction="eq2", s
         except ValueError as exc:   # no stable steady state: this trajectory fails, as simulate would
             errors[i] = exc
             A0s[i] = 0.0
+    return P, coef, fric, A0s, lays, errors
 
+
+def _offsets(lays):
+    """Where each trajectory's pieces and output rows sit in the flat arrays.
+
+    Returns ``(poff, rows, ooff, out_piece)``: piece offsets (N + 1), output rows per
+    trajectory (N), output-row offsets (N + 1), and each output row's flat piece index.
+    """
     poff = np.concatenate([[0], np.cumsum([len(x.g) for x in lays])])
     rows = np.array([len(x.piece) for x in lays])
     ooff = np.concatenate([[0], np.cumsum(rows)])
     out_piece = np.concatenate([x.piece + poff[i] for i, x in enumerate(lays)])
+    return poff, rows, ooff, out_piece
+
+
+def _integrate_batch(coef, A0s, lays, poff, rows, ooff, out_piece, rtol, atol, h_min, max_steps):
+    """Run the batched Dormand-Prince 5(4) over all trajectories; the finished ``_Solver``.
+
+    Each trajectory's step budget is ``max_steps``, or by default
+    ``BATCH_MIN_STEPS + BATCH_STEPS_PER_STRAIN * path strain``. ``A0s`` is not modified.
+    """
     out_s = np.concatenate([x.s for x in lays])
     path = np.array([x.L.sum() for x in lays])
+    n = len(lays)
     budget = (BATCH_MIN_STEPS + BATCH_STEPS_PER_STRAIN * path).astype(int) if max_steps is None \
         else np.full(n, int(max_steps))
     A0_run = A0s.copy()
-    solver = _Solver(coef, A0_run, np.concatenate([x.g for x in lays]), np.concatenate([x.L for x in lays]),
-                     poff, out_piece, out_s, ooff, rtol, atol, h_min, budget).run()
-    code = solver.status.copy()
+    return _Solver(coef, A0_run, np.concatenate([x.g for x in lays]), np.concatenate([x.L for x in lays]),
+                   poff, out_piece, out_s, ooff, rtol, atol, h_min, budget).run()
 
-    # the table, vectorised over all rows
+
+def _batch_table(solver, lays, frictions, coef, fric, rows, out_piece, n):
+    """The output columns of every row from the batched states, and the bad-output check.
+
+    Returns ``(cols, traj, code)``: a dict of ``"trajectory"`` and ``model.COLUMNS``
+    arrays over all rows (failed trajectories included), each row's trajectory, and the
+    solver's per-trajectory status codes, a finished trajectory with a row at or beyond
+    X_c or not finite set to ``_BAD_OUTPUT``.
+    """
+    code = solver.status.copy()
     Y = solver.Y
     traj = np.repeat(np.arange(n), rows)
     gflat = np.concatenate([x.g for x in lays])
@@ -676,7 +729,7 @@ def simulate_batch(params, histories, model="model1", A0=None, friction="eq2", s
     tau = np.empty_like(X)
     with np.errstate(all="ignore"):
         for name, law, nargs in (("eq2", laws.stress_ratio_eq2, 4), ("quadratic", laws.friction_quadratic, 3)):
-            sel = np.repeat(np.array([f == name for f in lists["friction"]]), rows)
+            sel = np.repeat(np.array([f == name for f in frictions]), rows)
             if sel.any():
                 tau[sel] = law(X[sel], *(np.repeat(fric[:, c], rows)[sel] for c in range(nargs)))
     gd = np.concatenate([x.gammadot for x in lays])
@@ -689,11 +742,23 @@ def simulate_batch(params, histories, model="model1", A0=None, friction="eq2", s
     bad_row = ~(X < np.repeat(coef[:, 6], rows)) | ~np.isfinite(a) | ~np.isfinite(b) | ~np.isfinite(tau)
     bad_traj = np.bincount(traj[bad_row], minlength=n) > 0
     code[(code == _DONE) & bad_traj] = _BAD_OUTPUT
+    return cols, traj, code
 
-    # the trajectories the batch did not finish: simulate, one by one
-    in_batch = (code == _DONE) | (code == _DIVERGED)
-    solver_name = np.where(in_batch, "batched", "simulate").astype(object)
-    reason = np.array([FALLBACK_REASONS.get(c, "") for c in code], dtype=object)
+
+def _in_batch(code):
+    """Per trajectory: the batch settled it (finished, or diverged) rather than handing it over."""
+    return (code == _DONE) | (code == _DIVERGED)
+
+
+def _fall_back(code, errors, cols, solver, lists, P, A0s, poff, rows, points_per_strain, fallback):
+    """Settle the trajectories the batch did not finish, filling ``errors`` and ``cols`` in place.
+
+    A diverged trajectory gets its ``FabricDivergence`` (at the time the batch saw it);
+    each one handed over is integrated alone by ``model.simulate`` with ``fallback``
+    (``method``, ``rtol``, ``atol``, ``max_steps``), its rows overwriting the batch's,
+    or its error recorded. Trajectories that already have an error are left alone.
+    """
+    in_batch = _in_batch(code)
     start = np.concatenate([[0], np.cumsum(rows)[:-1]])
     for i in np.flatnonzero(code == _DIVERGED):
         if errors[i] is None:
@@ -705,16 +770,22 @@ def simulate_batch(params, histories, model="model1", A0=None, friction="eq2", s
             continue
         try:
             tab = simulate(P[i], lists["histories"][i], model=lists["model"][i], A0=A0s[i],
-                           method=fallback_method, rtol=fallback_rtol, atol=fallback_atol,
+                           method=fallback["method"], rtol=fallback["rtol"], atol=fallback["atol"],
                            friction=lists["friction"][i], strain_eval=lists["strain_eval"][i],
                            t_eval=lists["t_eval"][i], points_per_strain=points_per_strain,
-                           max_steps=fallback_max_steps)
+                           max_steps=fallback["max_steps"])
         except (ValueError, FloatingPointError, RuntimeError) as exc:
             errors[i] = exc
             continue
         sl = slice(start[i], start[i] + rows[i])
         for c in COLUMNS:
             cols[c][sl] = tab[c].to_numpy()
+
+
+def _batch_result(cols, traj, rows, code, errors, steps, n):
+    """The ``BatchResult``: the table without the failed trajectories' rows, the status, the errors."""
+    solver_name = np.where(_in_batch(code), "batched", "simulate").astype(object)
+    reason = np.array([FALLBACK_REASONS.get(c, "") for c in code], dtype=object)
     failed = np.array([e is not None for e in errors])
     if failed.any():
         keep = ~failed[traj]
@@ -725,7 +796,7 @@ def simulate_batch(params, histories, model="model1", A0=None, friction="eq2", s
     status = pd.DataFrame({
         "trajectory": np.arange(n),
         "status": [_status_word(e) for e in errors],
-        "solver": solver_name, "fallback_reason": reason, "steps": solver.steps,
+        "solver": solver_name, "fallback_reason": reason, "steps": steps,
         "message": ["" if e is None else str(e) for e in errors],
     })
     return BatchResult(table, status, errors, stop - kept_rows, stop)
