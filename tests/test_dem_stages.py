@@ -232,6 +232,20 @@ def kill_preshear_after_first_checkpoint(scene, cdir):
     return proc.pid
 
 
+def assert_resumed_without_gap_or_duplicate(cdir):
+    """The resumed pre-shear of ``cdir``: flagged resumed, t and strain strictly increasing (no duplicate,
+    no reordering), no step between rows longer than the coarse sampling interval (no gap).
+    Returns its series and sidecar."""
+    side = json.loads((cdir / "preshear.json").read_text())
+    assert side["resumed"] == 1
+    s = read(cdir / "preshear.csv")
+    t, strain = s["t"], s["strain"]
+    assert np.all(np.diff(t) > 0) and np.all(np.diff(strain) > 0)  # no duplicate, no reordering
+    dt_coarse = side["sampling_steps"]["coarse"] * side["dt"] / side["time_unit_s"]
+    assert np.diff(t).max() <= dt_coarse * (1 + 1e-9)  # no gap: not even one step more than the grid
+    return s, side
+
+
 def test_killed_stage_resumes_without_gap_or_duplicate(case, tmp_path):
     scene, cdir = _case_from_pack(case, tmp_path, preshear=dict(strain=2.5), run=dict(checkpoint_every_s=1))
     pid = kill_preshear_after_first_checkpoint(scene, cdir)
@@ -240,11 +254,6 @@ def test_killed_stage_resumes_without_gap_or_duplicate(case, tmp_path):
     assert r.returncode == 0, r.stderr[-2000:]
     assert "resumed from" in r.stdout
     assert f"stale lock of PID {pid} on host" in r.stdout  # SIGKILL left the lock file behind
-    side = json.loads((cdir / "preshear.json").read_text())
-    assert side["resumed"] == 1
-    s = read(cdir / "preshear.csv")
+    s, side = assert_resumed_without_gap_or_duplicate(cdir)
     t, strain = s["t"], s["strain"]
-    assert np.all(np.diff(t) > 0) and np.all(np.diff(strain) > 0)  # no duplicate, no reordering
-    dt_coarse = side["sampling_steps"]["coarse"] * side["dt"] / side["time_unit_s"]
-    assert np.diff(t).max() <= dt_coarse * (1 + 1e-9)  # no gap: not even one step more than the grid
     assert strain[-1] == pytest.approx(2.5, rel=0.05)
