@@ -47,9 +47,7 @@ rule batched_cost:
 
 rule calibration_cost:
     input:
-        series=lambda wc: [
-            f"{case_dir(label)}/{stage}.csv" for label in CASES for stage in ["preshear", *PROTOCOLS]
-        ],
+        series=campaign_series,
     output:
         table=report(
             f"{RESULTS}/accuracy/calibration_cost.csv",

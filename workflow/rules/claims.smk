@@ -15,7 +15,7 @@ rule claims:
     input:
         predictions=expand(f"{COMPARE}/{{calset}}/predictions.csv", calset=list(CALIBRATION_SETS)),
         errors=expand(f"{COMPARE}/{{calset}}/errors.csv", calset=list(CALIBRATION_SETS)),
-        series=compare_dem_inputs,
+        series=campaign_series,
         params=calibration_params("all"),
     output:
         table=report(

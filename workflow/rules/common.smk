@@ -26,6 +26,11 @@ def dem_outputs(protocols=None):
     ]
 
 
+def campaign_series(wildcards=None):
+    """Every pre-shear and reversal series of the campaign (all cases, all protocols)."""
+    return [f"{case_dir(label)}/{stage}.csv" for label in CASES for stage in ["preshear", *PROTOCOLS]]
+
+
 def all_targets():
     targets = dem_outputs() + [f"{RESULTS}/dem/campaign_summary.csv"]
     targets += calibration_targets() + compare_targets() + claims_targets() + accuracy_targets()

@@ -18,19 +18,10 @@ wildcard_constraints:
     calset="|".join(CALIBRATION_SETS) or "all",
 
 
-def compare_dem_inputs(wildcards=None):
-    """Every pre-shear and reversal run the comparison reads (all cases, all protocols)."""
-    return [
-        f"{case_dir(label)}/{stage}.csv"
-        for label in CASES
-        for stage in ["preshear", *PROTOCOLS]
-    ]
-
-
 rule compare_predict:
     input:
         params=lambda wc: calibration_params(wc.calset),
-        series=compare_dem_inputs,
+        series=campaign_series,
     output:
         predictions=f"{COMPARE}/{{calset}}/predictions.csv",
         tables=[
@@ -97,7 +88,7 @@ rule compare_heldout:
 rule compare_sensitivity:
     input:
         params=calibration_params(SENSITIVITY_SET),
-        series=compare_dem_inputs,
+        series=campaign_series,
     output:
         table=report(
             f"{COMPARE}/{SENSITIVITY_SET}/sensitivity.csv",
