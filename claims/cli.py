@@ -4,8 +4,8 @@ r"""Command line of the claims stage.
 
     python -m claims --compare results/compare --dem results/dem/<case> ... \
         [--calibration results/calibration/all/params.yaml] [--sets all heaviside_only ...] \
-        [--resamples 2000] [--seed 0] --out results/claims
-        # -> paper_claims.csv, paper_claims.png, README_section.md
+        [--resamples 2000] [--seed 0] [--preset paper=config/config.yaml ...] --out results/claims
+        # -> paper_claims.csv, paper_claims.png, power.csv, README_section.md
 
 Bad input (a missing table or column, a bad DEM file) exits with status 2 and
 a message naming the file.
@@ -19,7 +19,7 @@ from pathlib import Path
 
 from dem_contract import DEMInputError
 
-from . import inputs, report, table
+from . import inputs, power, report, table
 
 
 def build_parser():
@@ -31,8 +31,17 @@ def build_parser():
     ap.add_argument("--sets", nargs="*", default=None, help="calibration sets to read (default: every one found)")
     ap.add_argument("--resamples", type=int, default=2000, help="bootstrap resamples (default 2000)")
     ap.add_argument("--seed", type=int, default=0, help="random seed of the bootstrap")
+    ap.add_argument("--preset", nargs="*", default=[], metavar="NAME=CONFIG",
+                    help="presets whose power the README section states, e.g. paper=config/config.yaml")
     ap.add_argument("--out", required=True, help="output folder, e.g. results/claims")
     return ap
+
+
+def _preset(text):
+    name, sep, path = text.partition("=")
+    if not (sep and name and path):
+        raise ValueError(f"--preset {text!r}: expected NAME=CONFIG.yaml, e.g. paper=config/config.yaml")
+    return name, path
 
 
 def main(argv=None) -> int:
@@ -49,7 +58,12 @@ def main(argv=None) -> int:
         tab = table.claims_table(pred, dem_cases, table.eq2_params(params), args.resamples, args.seed)
         tab.to_csv(out / "paper_claims.csv", index=False, float_format="%.6g")
         report.forest_plot(tab, out / "paper_claims.png")
-        (out / "README_section.md").write_text(report.markdown_section(tab, source=f"`{out / 'paper_claims.csv'}`"))
+        pw, cost = power.power_table(inputs.runs(pred), args.dem, tab)
+        pw.to_csv(out / "power.csv", index=False, float_format="%.6g")
+        presets = [power.preset_from_config(*_preset(p), cost) for p in args.preset]
+        section = report.markdown_section(tab, source=f"`{out / 'paper_claims.csv'}`")
+        section += "\n" + report.power_section(pw, presets, power.campaign_preset(pw), power.fabric_noise_check(args.dem))
+        (out / "README_section.md").write_text(section)
     except (DEMInputError, ValueError) as exc:
         print(f"claims: error: {exc}", file=sys.stderr)
         return 2

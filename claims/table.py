@@ -202,8 +202,15 @@ def _oos_detail(pairs, missing):
             + (f"; {missing} run(s) left out: a model could not be integrated" if missing else ""))
 
 
-def early_error_row(runs, claim_id, claim, source, column, label, window, boot) -> dict:
-    """Claims 4 and 7: RMSE over the first ``window`` strain, Model 1 minus Model 2, paired per run."""
+def early_error_differences(runs, column, window):
+    """Claims 4 and 7's paired differences: per case, the out-of-sample runs' RMSE, Model 1 minus Model 2.
+
+    Returns
+    -------
+    (dict, dict, list, int)
+        case -> differences of its runs (``_per_seed`` makes the per-seed means), model -> RMSE of every
+        run, the out-of-sample (key, curves) pairs and how many runs lacked a model (``_oos``).
+    """
     pairs, missing = _oos(runs)
     diffs, r = {}, {m: [] for m in MODELS}
     for key, cur in pairs:
@@ -212,6 +219,12 @@ def early_error_row(runs, claim_id, claim, source, column, label, window, boot) 
         for m in MODELS:
             r[m].append(e[m])
         diffs.setdefault(key[1], []).append(e["model1"] - e["model2"])
+    return diffs, r, pairs, missing
+
+
+def early_error_row(runs, claim_id, claim, source, column, label, window, boot) -> dict:
+    """Claims 4 and 7: RMSE over the first ``window`` strain, Model 1 minus Model 2, paired per run."""
+    diffs, r, pairs, missing = early_error_differences(runs, column, window)
     _, v = _per_seed(diffs)
     est, lo, hi, n = boot(v)
     return _row(

@@ -1,14 +1,27 @@
 # The paper's claims decided with statistics (python -m claims, see the claims package):
 # results/claims/paper_claims.csv (one row per claim: statistic, 95 % interval, test,
-# n, verdict), its forest plot and the Markdown section the README links to.
+# n, verdict), its forest plot and the Markdown section the README links to, and
+# power.csv: seeds (and DEM volume, core-hours) needed to decide claims 4 and 7 at
+# 95 % with 80 % power, with whether the paper (and bulk) preset reach it.
 # Reads every calibration set's predictions.csv and errors.csv (the model comparisons
 # use only runs a set was not calibrated on), the DEM series, and set "all"'s Eq. 2.
 # Optional config keys under `claims:` (all have defaults):
 #   resamples: bootstrap resamples (2000)
 
+from pathlib import Path
+
 CLAIMS = f"{RESULTS}/claims"
 CLAIMS_CATEGORY = "The paper's claims"
 CLAIMS_RESAMPLES = config.get("claims", {}).get("resamples", 2000)
+# Presets whose power the README section states (those whose config file exists).
+CLAIMS_PRESETS = {name: path for name, path in (("paper", "config/config.yaml"), ("bulk", "config/bulk.yaml"))
+                  if Path(path).exists()}
+
+
+def dem_sidecars(wildcards=None):
+    """The stage sidecars and scenes of every case: disks and CPU time of the DEM (claims/power.py)."""
+    return [f"{case_dir(label)}/{stage}.json" for label in CASES for stage in ["pack", "preshear", *PROTOCOLS]] + [
+        f"{case_dir(label)}/scene.json" for label in CASES]
 
 
 rule claims:
@@ -17,6 +30,8 @@ rule claims:
         errors=expand(f"{COMPARE}/{{calset}}/errors.csv", calset=list(CALIBRATION_SETS)),
         series=campaign_series,
         params=calibration_params("all"),
+        sidecars=dem_sidecars,
+        presets=list(CLAIMS_PRESETS.values()),
     output:
         table=report(
             f"{CLAIMS}/paper_claims.csv",
@@ -29,10 +44,16 @@ rule claims:
             category=CLAIMS_CATEGORY,
         ),
         section=f"{CLAIMS}/README_section.md",
+        power=report(
+            f"{CLAIMS}/power.csv",
+            caption="../report/claims_power.rst",
+            category=CLAIMS_CATEGORY,
+        ),
     params:
         dirs=[case_dir(label) for label in CASES],
         sets=list(CALIBRATION_SETS),
         resamples=CLAIMS_RESAMPLES,
+        presets=" ".join(f"{name}={path}" for name, path in CLAIMS_PRESETS.items()),
     resources:
         runtime=COST_CLAIMS.runtime,
         mem_mb=COST_CLAIMS.mem_mb,
@@ -43,9 +64,9 @@ rule claims:
     threads: 1
     shell:
         "{PY} -m claims --compare {COMPARE} --dem {params.dirs} --calibration {input.params}"
-        " --sets {params.sets} --resamples {params.resamples} --out {CLAIMS} > {log} 2>&1"
+        " --sets {params.sets} --resamples {params.resamples} --preset {params.presets} --out {CLAIMS} > {log} 2>&1"
 
 
 def claims_targets():
-    """The claims table, its figure and its README section."""
+    """The claims table, its figure, its README section and the power table."""
     return list(rules.claims.output)

@@ -1,0 +1,285 @@
+r"""Power of the model comparisons: how much DEM decides "Model 1 better than Model 2" at 95 %.
+
+Claims 4 (early |A|) and 7 (early mu) are decided on the per-seed means
+:math:`d_i` of the paired out-of-sample differences Model 1 minus Model 2
+(``claims.table.early_error_differences``). With their seed-to-seed standard
+deviation :math:`s` and an effect :math:`\delta`, the power of ``n`` seeds is
+the probability that the two-sided 95 % Student t interval of the mean lies
+entirely on the effect's side of 0 (the verdict "reproduced" for
+:math:`\delta < 0`):
+
+.. math:: P(n) = 1 - F_{t'}\big(t_{0.975,\,n-1};\ n - 1,\ |\delta| \sqrt n / s\big)
+
+with :math:`F_{t'}` the noncentral t distribution (``scipy.stats.nct``).
+``seeds_needed`` is the smallest ``n`` with :math:`P(n) \ge 0.8`; for large ``n``
+it approaches the normal closed form
+:math:`n \approx \big((z_{0.975} + z_{0.8})\, s / \delta\big)^2`. The table's
+interval is the wider of the t interval and a bootstrap, so this ``n`` is a
+lower bound.
+
+Two effects per claim (``EFFECTS``):
+
+- ``measured``: the table's point estimate (it may be about 0, then no
+  volume is enough: ``n`` is infinite or beyond any campaign);
+- ``minimal``: the smallest effect worth deciding, ``MIN_EFFECT_FRACTION`` of
+  the fall the models have to follow (mean over the scored runs of the DEM
+  curve's value at the reversal minus its minimum, ``SMOOTH``-sample running
+  mean). An improvement below 5 % of the fall would not show on Figs. 4 and 5.
+
+DEM volume. Assumed: the per-seed differences are set by the DEM's noise,
+which falls as :math:`N^{-1/2}` with the number of disks :math:`N` and as
+:math:`k^{-1/2}` with the number of independent reversal transients :math:`k`
+scored per seed, so
+
+.. math:: s(N, k) = s_0 \sqrt{N_0 k_0 / (N k)}
+
+and the volume seeds x disks x transients needed is about constant.
+``fabric_noise_check`` tests the first half against the data: the per-sample
+fabric noise of the steady pre-shear against that of independent contacts,
+:math:`\operatorname{sd}(A_{xx}) = \operatorname{sd}(\cos 2\theta)/2 / \sqrt{n_c} = 1/\sqrt{8 n_c}`.
+Core-hours use the measured CPU time of the campaign's DEM stages (the
+sidecars' ``cpu_time_s``), scaled linearly with :math:`N` at the campaign's
+contact stiffness, inertial number and time step; YADE's throughput per
+particle-step falls about 3x from 500 to 5,000 disks (README), so at larger
+:math:`N` this is a lower bound.
+"""
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import yaml
+from scipy import stats
+
+from dem_contract import DEMInputError, read_series
+
+from . import measures, table
+
+ALPHA = 0.05
+POWER = 0.8
+MIN_EFFECT_FRACTION = 0.05
+EFFECTS = ("measured", "minimal")
+COMPARED = (("4", "A_norm", "|A|", table.EARLY_A), ("7", "mu", "mu", table.EARLY_MU))
+N_MAX = 10**7     # seeds beyond this are reported as infinite
+STAGES = ("pack", "preshear")
+COLUMNS = ["claim_id", "quantity", "window", "effect_choice", "effect", "sd_per_seed", "seeds_measured",
+           "disks_per_seed", "transients_per_seed", "seeds_needed", "transients", "particles", "core_hours",
+           "power_measured"]
+
+
+# --------------------------------------------------------------------------- the t-test's power
+
+
+def power_t(n, sd: float, delta: float, alpha: float = ALPHA) -> float:
+    r"""Probability that the two-sided (1 - alpha) t interval of ``n`` values lies on ``delta``'s side of 0.
+
+    .. math:: P = 1 - F_{t'}\big(t_{1-\alpha/2,\,n-1};\ n-1,\ |\delta|\sqrt n/s\big)
+
+    Parameters
+    ----------
+    n : int or float
+        Number of independent values (seeds), at least 2.
+    sd : float
+        Their standard deviation.
+    delta : float
+        The true mean (the effect).
+    """
+    if n < 2 or not (np.isfinite(sd) and sd > 0 and np.isfinite(delta)):
+        return math.nan
+    df = n - 1
+    crit = stats.t.ppf(1.0 - alpha / 2.0, df)
+    return float(stats.nct.sf(crit, df, abs(delta) * math.sqrt(n) / sd))
+
+
+def normal_seeds(sd: float, delta: float, alpha: float = ALPHA, power: float = POWER) -> float:
+    r"""The normal approximation :math:`n = \big((z_{1-\alpha/2} + z_{P})\, s/\delta\big)^2` (not rounded)."""
+    if delta == 0:
+        return math.inf
+    return float(((stats.norm.ppf(1 - alpha / 2) + stats.norm.ppf(power)) * sd / delta) ** 2)
+
+
+def seeds_needed(sd: float, delta: float, alpha: float = ALPHA, power: float = POWER) -> float:
+    """Smallest n >= 2 with ``power_t(n) >= power``; ``inf`` for no effect or beyond ``N_MAX``; NaN without sd.
+
+    Iterates up from the normal approximation (the t test needs at least as many seeds).
+    """
+    if not (np.isfinite(sd) and sd > 0) or not np.isfinite(delta):
+        return math.nan
+    start = normal_seeds(sd, delta, alpha, power)
+    if not start <= N_MAX:
+        return math.inf
+    n = max(2, int(math.floor(start)))
+    while power_t(n, sd, delta, alpha) < power:
+        n += 1
+    return float(n)
+
+
+def scaled_sd(sd0: float, disks0: float, transients0: float, disks: float, transients: float) -> float:
+    r"""Per-seed s.d. at ``disks`` and ``transients`` per seed: :math:`s_0 \sqrt{N_0 k_0 / (N k)}`."""
+    return float(sd0 * math.sqrt(disks0 * transients0 / (disks * transients)))
+
+
+# --------------------------------------------------------------------------- what the campaign measured
+
+
+def fall_size(pairs, column: str) -> float:
+    r"""Mean over the scored runs of the DEM fall :math:`\bar x(0) - \min_s \bar x(s)` (running mean ``measures.SMOOTH``)."""
+    sizes = []
+    for _, cur in pairs:
+        x = measures.smooth(cur["dem"][column].to_numpy())
+        sizes.append(float(x[0] - np.nanmin(x)))
+    return _mean(sizes)
+
+
+def _sidecar(path) -> dict:
+    try:
+        return json.loads(Path(path).read_text())
+    except (OSError, json.JSONDecodeError) as exc:
+        raise DEMInputError(f"{path}: stage sidecar not readable ({exc})") from None
+
+
+def _mean(values) -> float:
+    v = np.asarray(values, float)
+    v = v[np.isfinite(v)]
+    return float(v.mean()) if v.size else math.nan
+
+
+def dem_cost(case_dirs, protocols) -> dict:
+    """Disks and CPU seconds per case from the stage sidecars (``N``, ``cpu_time_s``): means over the cases.
+
+    Returns ``disks``, ``setup_cpu_s`` (packing and pre-shear), ``transient_cpu_s`` (one reversal run), NaN
+    where the sidecars do not say (model-made cases), and ``geometry`` (``H_over_d``, ``W_over_H`` of the
+    first case's scene.json, or None).
+    """
+    disks, setup, transient, geometry = [], [], [], None
+    for d in map(Path, case_dirs):
+        side = {st: _sidecar(d / f"{st}.json") for st in (*STAGES, *protocols) if (d / f"{st}.json").exists()}
+        disks.append(side.get("preshear", {}).get("N", math.nan))
+        setup.append(sum(side.get(st, {}).get("cpu_time_s", math.nan) for st in STAGES))
+        transient += [side[p].get("cpu_time_s", math.nan) for p in protocols if p in side]
+        if geometry is None and (d / "scene.json").exists():
+            geometry = _sidecar(d / "scene.json").get("geometry")
+    return {"disks": _mean(disks), "setup_cpu_s": _mean(setup), "transient_cpu_s": _mean(transient),
+            "geometry": geometry}
+
+
+def fabric_noise_check(case_dirs) -> dict:
+    r"""Per-sample fabric noise of the steady pre-shear against that of independent contacts.
+
+    Measured: s.d. of A_xx and A_xy about a straight line over the last half of
+    the pre-shear, pooled. Independent contacts of near-uniform orientation:
+    :math:`1/\sqrt{8 \bar n_c}` (``n_contacts`` of the same samples). A ratio
+    near 1 says the fabric noise is the sampling noise of the contacts, which
+    falls as :math:`N^{-1/2}`.
+    """
+    measured, expected = [], []
+    for d in map(Path, case_dirs):
+        pre = read_series(d / "preshear.csv", ("t", "strain", "A_xx", "A_xy", "n_contacts"), 10,
+                          what="the pre-shear of the case")
+        pre = pre[pre["strain"].abs() >= pre["strain"].abs().max() / 2]
+        s = pre["strain"].abs().to_numpy()
+        for c in ("A_xx", "A_xy"):
+            x = pre[c].to_numpy()
+            measured.append(float(np.std(x - np.polyval(np.polyfit(s, x, 1), s), ddof=2)))
+        expected.append(1.0 / math.sqrt(8.0 * pre["n_contacts"].mean()))
+    m, e = float(np.mean(measured)), float(np.mean(expected))
+    return {"measured": m, "independent_contacts": e, "ratio": m / e}
+
+
+def transients_per_seed(pairs) -> float:
+    """Mean number of distinct reversal runs (protocols) scored out of sample per case."""
+    per_case = {}
+    for key, _ in pairs:
+        per_case.setdefault(key[1], set()).add(key[3])
+    return _mean([len(v) for v in per_case.values()])
+
+
+# --------------------------------------------------------------------------- the power table
+
+
+def power_table(runs: dict, case_dirs, table_rows: pd.DataFrame, protocols=("heaviside", "sinusoidal"),
+                min_effect_fraction: float = MIN_EFFECT_FRACTION):
+    """One row per compared claim (4, 7) and effect choice (``COLUMNS``), and the campaign's DEM cost.
+
+    Parameters
+    ----------
+    runs : dict
+        ``claims.inputs.runs`` of the comparison's curves.
+    case_dirs : list of path
+        The DEM cases (stage sidecars: disks and CPU time).
+    table_rows : DataFrame
+        The claims table (its estimates are the measured effects).
+    """
+    cost = dem_cost(case_dirs, protocols)
+    estimates = table_rows.set_index("claim_id")["estimate"]
+    rows = []
+    for claim_id, column, label, window in COMPARED:
+        diffs, _, pairs, _ = table.early_error_differences(runs, column, window)
+        _, v = table._per_seed(diffs)
+        sd = float(np.std(v, ddof=1)) if v.size >= 2 else math.nan
+        k0 = transients_per_seed(pairs)
+        effects = {"measured": float(estimates.get(claim_id, math.nan)),
+                   "minimal": -min_effect_fraction * fall_size(pairs, column)}
+        for choice in EFFECTS:
+            delta = effects[choice]
+            n = seeds_needed(sd, delta)
+            seed_cpu = cost["setup_cpu_s"] + k0 * cost["transient_cpu_s"]
+            rows.append(dict(
+                claim_id=claim_id, quantity=label, window=window, effect_choice=choice, effect=delta,
+                sd_per_seed=sd, seeds_measured=int(v.size), disks_per_seed=cost["disks"],
+                transients_per_seed=k0, seeds_needed=n, transients=n * k0, particles=n * cost["disks"],
+                core_hours=n * seed_cpu / 3600.0, power_measured=power_t(v.size, sd, delta)))
+    return pd.DataFrame(rows, columns=COLUMNS), cost
+
+
+# --------------------------------------------------------------------------- presets
+
+
+def preset_from_config(name: str, path, cost: dict) -> dict:
+    """Seeds (cases pooled across ensembles), disks and out-of-sample transients per case of a preset's YAML.
+
+    Disks: the measured campaign's, scaled by the cell's area :math:`H^2\\,(W/H)`. Transients: every
+    reversal protocol when the preset has two ensembles or more (a set per I scores the other I's runs),
+    otherwise the protocols some calibration set leaves out (``heaviside_only`` scores the sinusoidal run).
+    """
+    try:
+        cfg = yaml.safe_load(Path(path).read_text())
+    except (OSError, yaml.YAMLError) as exc:
+        raise ValueError(f"{path}: preset {name!r} not readable ({exc})") from None
+    try:
+        load = cfg["loading"]
+        rates = load.get("inertial_numbers") or load.get("wall_velocities")
+        ensembles = len(load["pressures"]) * len(rates)
+        seeds = len(cfg["seeds"]) * ensembles
+        protocols = list(cfg["protocols"])
+        cell = cfg["cell"]
+    except (KeyError, TypeError) as exc:
+        raise ValueError(f"{path}: preset {name!r} lacks {exc} (loading, seeds, protocols, cell)") from None
+    if ensembles >= 2:
+        k = len(protocols)
+    else:
+        sets = (cfg.get("calibration") or {}).get("sets") or {}
+        k = sum(any(p not in (s or {}).get("protocols", protocols) for s in sets.values()) for p in protocols)
+    g = cost.get("geometry") or {}
+    area0 = g.get("H_over_d", math.nan) ** 2 * g.get("W_over_H", 4)
+    disks = cost["disks"] * cell["H_over_d"] ** 2 * cell.get("W_over_H", 4) / area0
+    return {"name": name, "seeds": seeds, "disks": float(disks), "transients": float(k)}
+
+
+def reach(row, seeds: int, disks: float, transients: float) -> dict:
+    """Whether ``seeds`` cases of ``disks`` disks and ``transients`` scored transients each reach 80 % power."""
+    sd = scaled_sd(row["sd_per_seed"], row["disks_per_seed"], row["transients_per_seed"], disks, transients) \
+        if transients > 0 else math.nan
+    n = seeds_needed(sd, row["effect"])
+    return {"seeds_needed": n, "power": power_t(seeds, sd, row["effect"]), "reached": bool(seeds >= n)}
+
+
+def campaign_preset(power: pd.DataFrame) -> dict:
+    """The measured campaign itself as a preset."""
+    r = power.iloc[0]
+    return {"name": "measured (this campaign)", "seeds": int(r["seeds_measured"]), "disks": r["disks_per_seed"],
+            "transients": r["transients_per_seed"]}
+
