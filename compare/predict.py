@@ -20,6 +20,12 @@ as follows and integrated with ``model.tabulated``:
 Both models start from the DEM fabric ``A0`` just before the reversal. Model 1
 may raise ``PoleError`` for poor parameters: it is caught and returned as a
 status, never raised.
+
+``predict`` integrates one model with ``model.simulate`` (LSODA); ``predict_many``
+integrates many parameter sets on the same run in one ``model.batched.simulate_batch``
+call (per-trajectory Dormand-Prince 5(4); a trajectory that meets the pole, turns
+stiff or runs out of steps falls back to ``simulate`` alone), equal to ``predict`` to
+the batched-vs-LSODA agreement (better than 1e-6 in |A|, theta_A and mu).
 """
 from __future__ import annotations
 
@@ -30,6 +36,7 @@ import pandas as pd
 
 from dem_contract import reversal_indices
 from model import PoleError, simulate, tabulated
+from model.batched import simulate_batch
 
 from .dem import Reversal
 
@@ -134,12 +141,59 @@ def predict(rev: Reversal, params, model: str, friction: str | None = None) -> P
     history, t_eval, width = imposed_history(rev)
     try:
         sim = simulate(params, history, model=model, A0=rev.A0, friction=friction, t_eval=t_eval)
-    except PoleError as exc:
+    except (ValueError, FloatingPointError) as exc:   # PoleError; e.g. no steady state, non-finite output
+        return _prediction(rev, model, friction, width, exc)
+    return _prediction(rev, model, friction, width, sim)
+
+
+def predict_many(rev: Reversal, params_list, model: str, friction: str | None = None) -> list:
+    """``predict`` for each parameter set of ``params_list`` on the same run, in one batched integration.
+
+    Parameters
+    ----------
+    rev : Reversal
+    params_list : sequence of ModelParams, dict or path
+    model : {"model1", "model2"}
+    friction : {"eq2", "quadratic"}, optional
+
+    Returns
+    -------
+    list of Prediction
+        One per parameter set, in order; a failed trajectory has ``table`` None and the status
+        ``predict`` gives (its error is ``simulate``'s: the batch hands such trajectories over).
+    """
+    if model not in MODELS:
+        raise ValueError(f"model = {model!r} is not one of {MODELS}")
+    friction = friction or DEFAULT_FRICTION[model]
+    params_list = list(params_list)
+    if not params_list:
+        return []
+    history, t_eval, width = imposed_history(rev)
+    res = simulate_batch(params_list, history, model=model, A0=tuple(rev.A0), friction=friction, t_eval=t_eval)
+    out = []
+    for i, err in enumerate(res.errors):
+        if err is not None and not isinstance(err, (ValueError, FloatingPointError)):
+            raise err                                   # what predict would raise (e.g. a step budget)
+        out.append(_prediction(rev, model, friction, width, err if err is not None else res.trajectory(i)))
+    return out
+
+
+def predict_loop(rev: Reversal, params_list, model: str, friction: str | None = None) -> list:
+    """``predict_many`` one ``predict`` (``model.simulate``, LSODA) at a time: the reference it is checked against."""
+    return [predict(rev, p, model, friction) for p in params_list]
+
+
+INTEGRATORS = {"batched": predict_many, "loop": predict_loop}
+
+
+def _prediction(rev: Reversal, model: str, friction: str, width: int, sim) -> Prediction:
+    """A ``Prediction`` from ``simulate``'s table, or from the error it raised (then ``table`` is None)."""
+    if isinstance(sim, PoleError):
         return Prediction(rev.label, rev.protocol, model, friction, None,
-                          f"PoleError: {exc}".replace("\n", " "), width, np.nan)
-    except (ValueError, FloatingPointError) as exc:   # e.g. no steady state, non-finite output
+                          f"PoleError: {sim}".replace("\n", " "), width, np.nan)
+    if isinstance(sim, Exception):
         return Prediction(rev.label, rev.protocol, model, friction, None,
-                          f"{type(exc).__name__}: {exc}".replace("\n", " "), width, np.nan)
+                          f"{type(sim).__name__}: {sim}".replace("\n", " "), width, np.nan)
     ds_model = sim["strain"].to_numpy()
     ds_dem = rev.data["strain"].to_numpy() - rev.strain0
     table = pd.DataFrame({

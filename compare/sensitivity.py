@@ -9,8 +9,10 @@ Model 2: c1, c2, c3) is moved alone:
 - to each end of its bootstrap interval (``intervals`` of params.yaml), when the
   calibration gave one.
 
-Each perturbed model is integrated exactly as in ``predict`` (from the run's
-fabric, on its own history). The table records the largest change from the
+Each perturbed model is integrated as in ``predict`` (from the run's fabric, on
+its own history): the fitted and all perturbed parameter sets of one model and
+run in one batched integration (``predict.predict_many``, equal to ``predict``'s
+LSODA to better than 1e-6 in |A|, theta_A and mu). The table records the largest change from the
 fitted-parameter curve of |A|, theta_A (modulo 180) and mu, the RMSE against the
 DEM, and which axis theta_A turns through; a perturbation that leaves the
 allowed range or makes Model 1 hit its pole is a row with that status. With
@@ -30,7 +32,7 @@ from .comparison import case_dirs_with
 from .dem import load_reversal
 from .figures import sensitivity_figure
 from .metrics import QUANTITIES
-from .predict import DEFAULT_FRICTION, MODELS, predict
+from .predict import DEFAULT_FRICTION, INTEGRATORS, MODELS
 
 KEYS = {"model1": ("a1", "b1", "c1", "a2", "b2", "c2", "X_c"), "model2": ("c1", "c2", "c3")}
 
@@ -65,8 +67,16 @@ def _representative(case_dirs):
     return sorted(by_group[first])[0][1]
 
 
-def run(case_dirs, params_path, protocols, figure_path, set_name="all", fractions=(0.01, 0.05), friction=None):
-    """Perturb, integrate, tabulate and plot; returns (table, number of integrations)."""
+def run(case_dirs, params_path, protocols, figure_path, set_name="all", fractions=(0.01, 0.05), friction=None,
+        integrator="batched"):
+    """Perturb, integrate, tabulate and plot; returns (table, number of integrations).
+
+    ``integrator``: ``"batched"`` (``predict.predict_many``) or ``"loop"`` (``predict.predict_loop``,
+    one LSODA integration at a time).
+    """
+    if integrator not in INTEGRATORS:
+        raise ValueError(f"integrator = {integrator!r} is not one of {', '.join(INTEGRATORS)}")
+    integrate = INTEGRATORS[integrator]
     params = load_params(params_path)
     friction = dict(DEFAULT_FRICTION, **(friction or {}))
     rows, bands, n = [], {}, 0
@@ -74,13 +84,12 @@ def run(case_dirs, params_path, protocols, figure_path, set_name="all", fraction
         rev = load_reversal(_representative(case_dirs_with(case_dirs, protocol)), protocol)  # cases may lack a protocol
         dem = rev.data
         for model in MODELS:
-            nominal = predict(rev, params, model, friction[model])
             base = dict(set=set_name, case=rev.label, protocol=protocol, model=model)
+            nominal, perturbed, curves, n_runs = _perturbed_rows(base, rev, params, params_path, model,
+                                                                 friction[model], fractions, integrate)
             rows.append(_nominal_row(base, nominal, dem))
-            perturbed, curves, n_runs = _perturbed_rows(base, rev, params, params_path, model, friction[model],
-                                                        fractions, nominal)
             rows += perturbed
-            n += 1 + n_runs
+            n += n_runs
             bands[(protocol, model)] = dict(s_rev=dem["s_rev"].to_numpy(), dem=dem, case=rev.label,
                                             nominal=nominal.table, envelopes=_envelopes(curves, nominal))
     sensitivity_figure(bands, figure_path)
@@ -96,34 +105,43 @@ def _nominal_row(base, nominal, dem):
                 **{f"rmse_{q}": metrics.errors(dem, nominal.table)[f"rmse_{q}"] for q in QUANTITIES})
 
 
-def _perturbed_rows(base, rev, params, params_path, model, friction, fractions, nominal):
-    """One row per perturbation of ``model``'s coefficients (see ``perturbations``).
+def _perturbed_rows(base, rev, params, params_path, model, friction, fractions, integrate):
+    """The fitted curve and one row per perturbation of ``model``'s coefficients (see ``perturbations``).
 
-    Returns the rows, the perturbed curves per envelope (None for an invalid
-    parameter set or a failed run) and the number of integrations.
+    The fitted and every valid perturbed parameter set are integrated together
+    (``integrate``: ``predict.predict_many``, or ``predict.predict_loop``). Returns the fitted ``Prediction``, the rows, the
+    perturbed curves per envelope (None for an invalid parameter set or a
+    failed run) and the number of integrations.
     """
-    rows, curves, n = [], {}, 0
+    cases = []          # (row, envelope, parameters or the invalid/skipped status)
     for key, kind, env, value in perturbations(params, model, fractions):
         row = dict(base, parameter=key, kind=kind, fitted=params.to_dict()[model][key], value=value)
         if value == row["fitted"] and env != "interval":
-            rows.append(dict(row, status="skipped: fitted value is 0, a relative change is no change"))
+            cases.append((row, None, "skipped: fitted value is 0, a relative change is no change"))
             continue
         d = params.to_dict()
         d[model][key] = float(value)
         try:
-            p = params_from_dict(d, source=f"{params_path} with {model}.{key} = {value:.6g}")
+            cases.append((row, env, params_from_dict(d, source=f"{params_path} with {model}.{key} = {value:.6g}")))
         except ValueError as exc:
-            rows.append(dict(row, status=f"invalid: {exc}"))
-            curves.setdefault(env, []).append(None)
+            cases.append((row, env, f"invalid: {exc}"))
+    valid = [p for _, _, p in cases if not isinstance(p, str)]
+    nominal, *preds = integrate(rev, [params, *valid], model, friction)
+    preds = iter(preds)
+    rows, curves = [], {}
+    for row, env, p in cases:
+        if isinstance(p, str):
+            rows.append(dict(row, status=p))
+            if env is not None:
+                curves.setdefault(env, []).append(None)
             continue
-        pred = predict(rev, p, model, friction)
-        n += 1
+        pred = next(preds)
         curves.setdefault(env, []).append(pred.table)
         if pred.table is None:
             rows.append(dict(row, status=pred.status))
             continue
         rows.append(_change_row(row, pred.table, nominal.table, rev.data))
-    return rows, curves, n
+    return nominal, rows, curves, 1 + len(valid)
 
 
 def _change_row(row, table, nominal_table, dem):
