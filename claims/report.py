@@ -122,5 +122,7 @@ def power_section(power, presets: list, campaign: dict, noise: dict) -> str:
                      f"{p['transients']:g} scored transients): " + "; ".join(verdicts) + ".")
     lines.append("- a preset of S seeds x N disks x k scored transients reaches a row when S >= the seeds needed at "
                  "s.d. x sqrt(N0 k0 / (N k)) (N0, k0: this campaign's). A measured effect of the wrong sign "
-                 "(positive) is reached as 'contradicted', not 'reproduced'.")
+                 "(positive) is reached as 'contradicted', not 'reproduced'. The s.d. is that of these data: "
+                 "where the two models nearly coincide (a measured effect near 0) it understates the spread a "
+                 "pole that acts brings (README, \"The paper's claims\").")
     return "\n".join(lines) + "\n"
