@@ -16,6 +16,7 @@ on each run (``table`` module docstring).
 
 Modules: ``stats`` (bootstrap, Clopper-Pearson, the rule), ``measures``
 (per-run quantities), ``inputs`` (what is read), ``table`` (the rows),
+``power`` (seeds and DEM volume that decide claims 4 and 7: ``power.csv``),
 ``report`` (forest plot, Markdown section), ``cli`` (``python -m claims``).
 """
 from .stats import clopper_pearson, mean_interval, verdict

@@ -54,7 +54,7 @@ import pandas as pd
 import yaml
 from scipy import stats
 
-from dem_contract import DEMInputError, read_series
+from dem_contract import REVERSAL_PROTOCOLS, DEMInputError, read_series
 
 from . import measures, table
 
@@ -200,7 +200,7 @@ def transients_per_seed(pairs) -> float:
 # --------------------------------------------------------------------------- the power table
 
 
-def power_table(runs: dict, case_dirs, table_rows: pd.DataFrame, protocols=("heaviside", "sinusoidal"),
+def power_table(runs: dict, case_dirs, table_rows: pd.DataFrame, protocols=REVERSAL_PROTOCOLS,
                 min_effect_fraction: float = MIN_EFFECT_FRACTION):
     """One row per compared claim (4, 7) and effect choice (``COLUMNS``), and the campaign's DEM cost.
 
