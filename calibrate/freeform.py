@@ -69,11 +69,17 @@ Z95 = 1.959963984540054
 class FreeformSettings:
     n_breaks: int = 5                                   # breaks over the X range visited (K = n_breaks + 2 per alpha)
     penalties: tuple = (1e-4, 1e-2, 1.0, 100.0)         # lambda grid of the cross-validation
-    max_evals: int = 120                                # model evaluations of the final fit (Jacobian points count)
+    max_evals: int = 180                                # model evaluations of the final fit (Jacobian points count)
     cv_evals: int = 60                                  # ... of each cross-validation fit
     early_strain: float = 0.1
     friction: str = "quadratic"                         # Model 2's, as route 2 holds it
     n_resamples: int = 2000
+
+    def __post_init__(self):
+        if not (isinstance(self.n_breaks, int) and self.n_breaks >= 2):
+            raise ValueError(f"free-form fit: n_breaks = {self.n_breaks!r} must be an integer >= 2")
+        if not (len(self.penalties) and all(p > 0 for p in self.penalties)):
+            raise ValueError(f"free-form fit: penalties = {self.penalties!r} must be positive numbers")
 
     def as_dict(self) -> dict:
         return {k: (list(v) if isinstance(v, tuple) else v) for k, v in asdict(self).items()}
@@ -288,6 +294,12 @@ def paired(errors: pd.DataFrame, law: str, ref: str, score: str, n_resamples: in
     wide = errors.pivot_table(index=["case", "run"], columns="law", values=score)
     d = (wide[law] - wide[ref]).groupby(level="case").mean()
     return mean_interval(d.to_numpy(), n_resamples=n_resamples)
+
+
+def note_table(note: str) -> pd.DataFrame:
+    """``freeform.csv`` when the fit cannot run (e.g. one seed): one row, ``section`` = note."""
+    return pd.DataFrame([dict(section="note", key="not fitted", value=math.nan, low=math.nan, high=math.nan,
+                              n=math.nan, detail=note)])
 
 
 def table(res: dict, settings: FreeformSettings) -> pd.DataFrame:
