@@ -170,11 +170,26 @@ def fit_spline(replays, doc: dict, start: AlphaSpline, steady: dict, sigma_mu: f
                           "failed_evaluations": state["fails"], "message": message}
 
 
+def reversal_strain(replay) -> float:
+    """Path strain of the run's first reversal: the end of its leading pieces sheared as the pre-shear was.
+
+    The pre-shear's sign is the one for which the run's start is a steady state,
+    X = sqrt2 g A_xy < 0 (docs/model.md, Sec. 3): g = -sign(A_xy at the start).
+    """
+    g_pre = -np.sign(replay.A0[1])
+    s = 0.0
+    for g, length in replay.pieces:
+        if g != g_pre:
+            return s
+        s += length
+    return s
+
+
 def run_errors(c, replay, early_strain: float) -> dict:
     """RMS errors of one run's model curve ``c`` (a, b, signed mu at the samples) against its DEM samples."""
     dA = fabric_norm(c[:, 0], c[:, 1]) - fabric_norm(replay.a, replay.b)
     dth = angle_difference(fabric_angle_deg(c[:, 0], c[:, 1]), fabric_angle_deg(replay.a, replay.b))
-    s_rev = replay.pieces[0][1]
+    s_rev = reversal_strain(replay)
     early = (replay.s > s_rev) & (replay.s <= s_rev + early_strain)
     rms = lambda v: float(np.sqrt(np.mean(v**2))) if v.size else math.nan  # noqa: E731
     return {"early_A_norm": rms(dA[early]), "A_norm": rms(dA), "theta_A": rms(dth), "mu": rms(c[:, 2] - replay.mu)}
