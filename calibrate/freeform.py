@@ -4,17 +4,16 @@ Method
 ------
 Eq. 4 with alpha1, alpha2 any smooth functions of X (``model.laws.AlphaSpline``:
 cubic B-splines on ``n_breaks`` evenly spaced breaks over the X the samples
-visit, continued linearly outside) is fitted by trajectory fitting on the
+visit, from their 0.5th to their 99.5th percentile, continued linearly outside) is fitted by trajectory fitting on the
 residuals of route 2 (``route2.curves``, ``route2._residual_vector`` and the
 steady residuals of ``fits``), plus a roughness penalty
 
 .. math::
-    \lambda \sum_{i=1,2} \int \alpha_i''(X)^2\, dX
-    \approx \lambda \sum_i \sum_k \frac{(\Delta^2 c_{ik})^2}{h^3},
+    \lambda \sum_{i=1,2} \int_{x_0}^{x_m} \alpha_i''(X)^2\, dX = \lambda \sum_i |R c_i|^2
 
-h the break spacing, :math:`\Delta^2` the second difference of the
-coefficients (a straight line costs nothing, so the penalty shrinks toward
-Model 2's linear law, not toward zero). The friction law is held as route 2
+over the breaks, exact (``roughness_matrix``): a straight line costs nothing,
+so the penalty shrinks toward linear alphas (Model 2's law, with alpha1 free
+to have a slope), not toward zero. The friction law is held as route 2
 holds Model 2's (the quadratic law of [15]), so the free-form fit and Model 2
 differ only in their alphas. The start is Model 2's route-2 fit, represented
 exactly (``laws.spline_of_linear``).
@@ -68,7 +67,7 @@ Z95 = 1.959963984540054
 @dataclass(frozen=True)
 class FreeformSettings:
     n_breaks: int = 5                                   # breaks over the X range visited (K = n_breaks + 2 per alpha)
-    penalties: tuple = (1e-4, 1e-2, 1.0, 100.0)         # lambda grid of the cross-validation
+    penalties: tuple = (1e-6, 1e-4, 1e-2, 1.0)           # lambda grid of the cross-validation
     max_evals: int = 180                                # model evaluations of the final fit (Jacobian points count)
     cv_evals: int = 60                                  # ... of each cross-validation fit
     early_strain: float = 0.1
@@ -90,17 +89,39 @@ def sample_X(replays) -> np.ndarray:
     return np.concatenate([np.sqrt(2.0) * r.g * r.b for r in replays])
 
 
+#: Percentiles of the samples' X spanned by the breaks (single noisy samples do not stretch the range).
+X_RANGE = (0.5, 99.5)
+
+
 def breaks_for(replays, n_breaks: int) -> tuple:
-    """``n_breaks`` evenly spaced breaks from the smallest to the largest X the samples visit."""
-    X = sample_X(replays)
-    return tuple(np.linspace(float(X.min()), float(X.max()), n_breaks))
+    """``n_breaks`` evenly spaced breaks over the X the samples visit (percentiles ``X_RANGE``)."""
+    lo, hi = np.percentile(sample_X(replays), X_RANGE)
+    return tuple(np.linspace(float(lo), float(hi), n_breaks))
+
+
+def roughness_matrix(breaks) -> np.ndarray:
+    r"""R with :math:`\int_{x_0}^{x_m} \alpha''(X)^2\,dX = |R c|^2` for the cubic B-splines on ``breaks``.
+
+    :math:`\alpha''` is linear on each interval, so two-point Gauss-Legendre
+    quadrature per interval is exact: the rows of R are :math:`\sqrt{w_q} B_k''(x_q)`.
+    """
+    from scipy.interpolate import BSpline
+
+    from model.laws import spline_knots
+
+    b = np.asarray(breaks, dtype=float)
+    g, w = np.polynomial.legendre.leggauss(2)
+    mid, half = 0.5 * (b[1:] + b[:-1]), 0.5 * np.diff(b)
+    xq = (mid[:, None] + half[:, None] * g[None, :]).ravel()
+    wq = (half[:, None] * w[None, :]).ravel()
+    d2 = BSpline(spline_knots(b), np.eye(spline_size(b)), 3).derivative(2)(xq)   # (n_q, K)
+    return np.sqrt(wq)[:, None] * d2
 
 
 def _penalty_rows(spline: AlphaSpline, lam: float) -> np.ndarray:
-    r"""Residual rows of the roughness penalty: :math:`\sqrt{\lambda/h^3}\,\Delta^2 c_i` for both alphas."""
-    h = spline.breaks[1] - spline.breaks[0]
-    w = math.sqrt(lam / h**3)
-    return w * np.concatenate([np.diff(spline.c1, 2), np.diff(spline.c2, 2)])
+    r"""Residual rows of the roughness penalty: :math:`\sqrt\lambda\, R c_i` for both alphas (``roughness_matrix``)."""
+    R = roughness_matrix(spline.breaks)
+    return math.sqrt(lam) * np.concatenate([R @ spline.c1, R @ spline.c2])
 
 
 def fit_spline(replays, doc: dict, start: AlphaSpline, steady: dict, sigma_mu: float, lam: float,
@@ -116,7 +137,7 @@ def fit_spline(replays, doc: dict, start: AlphaSpline, steady: dict, sigma_mu: f
     """
     prm = params_from_dict(doc)
     K = spline_size(start.breaks)
-    n_res = sum(3 * len(r.s) for r in replays) + fits.N_STEADY + 2 * (K - 2)
+    n_res = sum(3 * len(r.s) for r in replays) + fits.N_STEADY + 2 * len(roughness_matrix(start.breaks))
     state = {"n": 0, "fails": 0, "best": None, "best_cost": np.inf}
     ready = {}
 

@@ -183,8 +183,8 @@ def fit_freeform(replays, doc2, steady, r1, out: Path, settings: Settings, log):
     res = freeform.run(replays, doc2, steady, r1["sigma_mu"], settings.route2, settings.freeform, log)
     tables.write_csv(res["table"], out / "freeform.csv")
     log(f"free-form fit done ({time.process_time() - t0:.1f} s CPU)")
-    X = freeform.sample_X(replays)
-    return freeform.curves_for_figure(res, np.linspace(X.min(), X.max(), 200))
+    br = res["spline"].breaks
+    return freeform.curves_for_figure(res, np.linspace(br[0], br[-1], 200))
 
 
 def run_bootstrap(cases, samples, replays, r1, r2, doc1, settings: Settings, log):
