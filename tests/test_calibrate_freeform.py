@@ -149,3 +149,16 @@ def test_cross_validation_picks_a_small_penalty_and_a_bend_for_a_strong_pole(mod
     tab = res["table"].set_index("key")
     bend = tab.loc["alpha1 bend at X_hi"]
     assert bend["high"] < 0.0   # alpha1 falls toward the pole, as c1 < 0 makes it
+
+
+def test_claims_table_gets_the_upper_bound_and_pole_rows_from_freeform_csv(model2_truth, tmp_path):
+    from claims import inputs, table
+
+    path = tmp_path / "freeform.csv"
+    model2_truth["res"]["table"].to_csv(path, index=False)
+    rows = table.freeform_rows(inputs.read_freeform(path))
+    assert [r["claim_id"] for r in rows] == ["8", "9"]
+    up = model2_truth["res"]["table"].set_index("key").loc["early_A_norm: freeform - model2"]
+    assert rows[0]["estimate"] == pytest.approx(up["value"]) and rows[0]["low"] == pytest.approx(up["low"])
+    assert all(r["verdict"] in ("reproduced", "contradicted", "inconclusive") for r in rows)
+    assert table.freeform_rows(freeform.note_table("one seed")) == []

@@ -2,7 +2,8 @@
 # results/claims/paper_claims.csv (one row per claim: statistic, 95 % interval, test,
 # n, verdict), its forest plot and the Markdown section the README links to.
 # Reads every calibration set's predictions.csv and errors.csv (the model comparisons
-# use only runs a set was not calibrated on), the DEM series, and set "all"'s Eq. 2.
+# use only runs a set was not calibrated on), the DEM series, and set "all"'s Eq. 2
+# (and its freeform.csv with calibration.freeform: claims 8 and 9, the free-form upper bound).
 # Optional config keys under `claims:` (all have defaults):
 #   resamples: bootstrap resamples (2000)
 
@@ -17,6 +18,7 @@ rule claims:
         errors=expand(f"{COMPARE}/{{calset}}/errors.csv", calset=list(CALIBRATION_SETS)),
         series=campaign_series,
         params=calibration_params("all"),
+        **({"freeform": f"{RESULTS}/calibration/all/freeform.csv"} if CALIBRATION_FREEFORM else {}),
     output:
         table=report(
             f"{CLAIMS}/paper_claims.csv",
@@ -33,6 +35,7 @@ rule claims:
         dirs=[case_dir(label) for label in CASES],
         sets=list(CALIBRATION_SETS),
         resamples=CLAIMS_RESAMPLES,
+        freeform=f"--freeform {RESULTS}/calibration/all/freeform.csv" if CALIBRATION_FREEFORM else "",
     resources:
         runtime=COST_CLAIMS.runtime,
         mem_mb=COST_CLAIMS.mem_mb,
@@ -43,7 +46,7 @@ rule claims:
     threads: 1
     shell:
         "{PY} -m claims --compare {COMPARE} --dem {params.dirs} --calibration {input.params}"
-        " --sets {params.sets} --resamples {params.resamples} --out {CLAIMS} > {log} 2>&1"
+        " --sets {params.sets} --resamples {params.resamples} {params.freeform} --out {CLAIMS} > {log} 2>&1"
 
 
 def claims_targets():
