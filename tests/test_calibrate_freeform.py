@@ -4,7 +4,7 @@ The recovery tests fit model-made DEM-layout cases (``calibrate.synthetic``): Mo
 without noise must come back within the tolerances stated below; a Model 1 truth with a strong pole
 (the round-trip tests' truth) at 0.5 x the 500-disk noise must make the cross-validation choose a
 small penalty (the pole cannot be followed by a straight line) and show the bend of alpha1 toward the
-pole. About 20 s of CPU for the module (the two calibrations to route 2 and the free-form fits).
+pole. About 12 s of CPU for the module (measured: the two calibrations to route 2 and the free-form fits).
 """
 from __future__ import annotations
 
