@@ -9,7 +9,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from . import backsolve, io, route2, smoothing
+from . import backsolve, freeform, io, route2, smoothing
 from .pipeline import Settings, run
 
 
@@ -45,6 +45,12 @@ def parser() -> argparse.ArgumentParser:
     g.add_argument("--steady-weight", type=float, default=1.0)
     g.add_argument("--min-samples", type=int, default=io.MIN_SAMPLES, help="fewest rows accepted per DEM file")
     g.add_argument("--no-figures", action="store_true")
+    g = p.add_argument_group("free-form alphas (upper bound of any X-dependent Eq. 4; calibrate/freeform.py)")
+    g.add_argument("--freeform", action="store_true",
+                   help="fit alpha1(X), alpha2(X) as penalised splines (penalty by leave-one-seed-out CV), "
+                        "score them against Models 1 and 2 on held-out seeds: freeform.csv, and on Figs. 3a, 3b")
+    g.add_argument("--freeform-breaks", type=int, default=freeform.FreeformSettings.n_breaks,
+                   help="spline breaks over the X range visited (at least 2)")
     return p
 
 
@@ -63,7 +69,8 @@ def main(argv=None) -> int:
                                          integrator=a.integrator,
                                          mu_weight=a.mu_weight, steady_weight=a.steady_weight),
             steady_weight=a.steady_weight, n_boot=a.bootstrap, boot_evals=a.bootstrap_evals, seed=a.seed,
-            min_samples=a.min_samples, figures=not a.no_figures)
+            min_samples=a.min_samples, figures=not a.no_figures,
+            freeform=freeform.FreeformSettings(n_breaks=a.freeform_breaks) if a.freeform else None)
         run(a.dem, a.out, settings, log=lambda m: print(m, file=sys.stderr, flush=True),
             argv=["python -m calibrate", *argv])
     except io.DEMInputError as exc:

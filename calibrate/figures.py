@@ -66,10 +66,12 @@ def fig2b(X, tau, eq2: dict, quad: dict, path, nbins=30):
     plt.close(fig)
 
 
-def fig3(bins, which, m1: dict, m2: dict, path):
+def fig3(bins, which, m1: dict, m2: dict, path, free=None):
     """alpha1 (which=1) or alpha2 (which=2) against X: back-solved bins and the Model 1 / Model 2 fits.
 
-    ``m1`` and ``m2`` map a route label to the block's values.
+    ``m1`` and ``m2`` map a route label to the block's values. ``free`` (optional,
+    ``freeform.curves_for_figure``): the free-form fit, drawn with its band of
+    +-1.96 jackknife standard errors over seeds.
     """
     col = f"alpha{which}"
     fig, ax = plt.subplots(figsize=(5.5, 4))
@@ -93,13 +95,18 @@ def fig3(bins, which, m1: dict, m2: dict, path):
         x = np.linspace(xmin, xmax, 100)
         ax.plot(x, np.broadcast_to(alpha_model2(x, **v)[which - 1], x.shape), "--", color=next(colors),
                 label=f"Model 2 ({label})")
+    if free is not None:
+        y, se = free[col], free[f"se{which}"]
+        ax.plot(free["X"], y, "-", lw=2, color="tab:green", label=free["label"])
+        if np.isfinite(se).any():
+            ax.fill_between(free["X"], y - 1.96 * se, y + 1.96 * se, color="tab:green", alpha=0.2, lw=0)
     used = bins[bins["used"]]
     if len(used):
         lo, hi = np.nanpercentile(used[col], [2, 98])
         pad = 0.5 * (hi - lo) + 1.0
         ax.set_ylim(lo - pad, hi + pad)
-    ax.set_xlabel(r"$X$")
-    ax.set_ylabel(rf"$\alpha_{which}$")
+    ax.set_xlabel(r"$X = A:D'/|D'|$ (dimensionless)")
+    ax.set_ylabel(rf"$\alpha_{which}$ (dimensionless)")
     ax.set_title(f"Fig. 3{'ab'[which - 1]}: " + rf"$\alpha_{which}$ against X")
     ax.legend(fontsize=7)
     fig.tight_layout()

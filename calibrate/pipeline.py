@@ -13,7 +13,7 @@ import pandas as pd
 from dem_contract import fabric_angle_deg, fabric_norm
 from model import default_params, params_from_dict, steady_state
 
-from . import backsolve, bootstrap, figures, fits, io, route1, route2, smoothing, tables
+from . import backsolve, bootstrap, figures, fits, freeform, io, route1, route2, smoothing, tables
 
 BLOCKS = ("friction_eq2", "friction_quadratic", "model1", "model2")
 #: Fewest seeds per ensemble for bootstrap intervals worth the name; below it the calibration warns.
@@ -34,12 +34,14 @@ class Settings:
     seed: int = 0
     min_samples: int = io.MIN_SAMPLES
     figures: bool = True
+    freeform: freeform.FreeformSettings | None = None   # None: no free-form fit (step 5b)
 
     def as_dict(self) -> dict:
         return {"protocols": list(self.protocols), "smoothing": self.smoothing.as_dict(),
                 "backsolve": self.backsolve.as_dict(), "route2": self.route2.as_dict(),
                 "steady_weight": self.steady_weight, "xc_margin": self.xc_margin, "n_boot": self.n_boot,
-                "boot_evals": self.boot_evals, "bootstrap_seed": self.seed, "min_samples": self.min_samples}
+                "boot_evals": self.boot_evals, "bootstrap_seed": self.seed, "min_samples": self.min_samples,
+                "freeform": self.freeform.as_dict() if self.freeform else None}
 
 
 def _route2_start(replays, doc, model, r1_values, steady, sigma_mu, s2, xc_margin):
@@ -162,6 +164,27 @@ def fit_route2(cases, samples, steady, r1, doc1, settings: Settings, log):
         log(f"route 2 {model}: {r2[model].extra['evaluations']} evaluations, {r2[model].message} "
             f"({time.time() - t0:.1f} s in route 2)")
     return replays, r2, doc2
+
+
+def fit_freeform(replays, doc2, steady, r1, out: Path, settings: Settings, log):
+    """Step 5b (only with ``settings.freeform``): free-form alphas against Models 1 and 2, ``freeform.csv``.
+
+    Returns the curves for Figs. 3a, 3b (``freeform.curves_for_figure``), or None when the step is off.
+    """
+    if settings.freeform is None:
+        return None
+    seeds = sorted({r.case for r in replays})
+    if len(seeds) < 2:
+        note = f"free-form fit skipped: its cross-validation leaves one seed out and needs 2 or more, got {seeds}"
+        log(f"warning: {note}")
+        tables.write_csv(freeform.note_table(note), out / "freeform.csv")
+        return None
+    t0 = time.process_time()
+    res = freeform.run(replays, doc2, steady, r1["sigma_mu"], settings.route2, settings.freeform, log)
+    tables.write_csv(res["table"], out / "freeform.csv")
+    log(f"free-form fit done ({time.process_time() - t0:.1f} s CPU)")
+    br = res["spline"].breaks
+    return freeform.curves_for_figure(res, np.linspace(br[0], br[-1], 200))
 
 
 def run_bootstrap(cases, samples, replays, r1, r2, doc1, settings: Settings, log):
@@ -393,15 +416,15 @@ def write_tables(out: Path, final, ptab, btab, quality, heldout, values) -> None
 
 
 def write_figures(out: Path, samples, replays, btab, doc1, doc2, final, default_route, settings: Settings,
-                  log) -> None:
+                  log, free=None) -> None:
     """Step 10: Fig. 2a, 2b, 3a, 3b and the default routes' curves against the DEM's."""
     X, mu = route1.friction_data(samples, settings.backsolve)
     figures.fig2a(samples, out / "fig2a_stress_vs_Axy.png")
     figures.fig2b(X, mu, doc1["friction_eq2"], doc1["friction_quadratic"], out / "fig2b_mu_vs_X.png")
     m1 = {"back-solve": doc1["model1"], "curves": doc2["model1"]}
     m2 = {"back-solve": doc1["model2"], "curves": doc2["model2"]}
-    figures.fig3(btab, 1, m1, m2, out / "fig3a_alpha1_vs_X.png")
-    figures.fig3(btab, 2, m1, m2, out / "fig3b_alpha2_vs_X.png")
+    figures.fig3(btab, 1, m1, m2, out / "fig3a_alpha1_vs_X.png", free)
+    figures.fig3(btab, 2, m1, m2, out / "fig3b_alpha2_vs_X.png", free)
     preds = {}
     prm = params_from_dict(final)
     for model in ("model1", "model2"):
@@ -433,6 +456,7 @@ def run(case_dirs, out, settings: Settings = Settings(), log=print, argv=None) -
     r1, doc1 = fit_route1(samples, steady, friction, settings)
     log(f"route 1 done ({time.time() - t0:.1f} s): {int(r1['bins']['used'].sum())} of {len(r1['bins'])} bins used")
     replays, r2, doc2 = fit_route2(cases, samples, steady, r1, doc1, settings, log)
+    free = fit_freeform(replays, doc2, steady, r1, out, settings, log)
     values, heldout, iv = run_bootstrap(cases, samples, replays, r1, r2, doc1, settings, log)
     log(f"bootstrap done ({time.time() - t0:.1f} s)")
     quality, default_route = score_routes(replays, heldout, r1, r2, doc1, doc2, settings)
@@ -448,7 +472,7 @@ def run(case_dirs, out, settings: Settings = Settings(), log=print, argv=None) -
     btab = tables.bins_table(r1["bins"], iv)
     write_tables(out, final, ptab, btab, quality, heldout, values)
     if settings.figures:
-        write_figures(out, samples, replays, btab, doc1, doc2, final, default_route, settings, log)
+        write_figures(out, samples, replays, btab, doc1, doc2, final, default_route, settings, log, free)
     log(f"wrote {out} ({time.time() - t0:.1f} s); default routes: {default_route}")
     return {"default_route": default_route, "params": final, "route1": r1, "route2": r2, "intervals": iv,
             "quality": pd.DataFrame(quality), "steady": steady, "steady_check": steady_check(final),

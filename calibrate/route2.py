@@ -207,8 +207,10 @@ def curves(items, replays, settings: Route2Settings) -> list:
 
     Parameters
     ----------
-    items : list of (params, model, friction)
-        One parameter set each (``ModelParams``), with its model and friction law.
+    items : list of (params, model, friction) or (params, model, friction, alpha_spline)
+        One parameter set each (``ModelParams``), with its model and friction law; an
+        ``model.laws.AlphaSpline`` replaces the model's alphas (free-form fit,
+        ``calibrate.freeform``; batched integrator only).
     replays : list of Replay
         The runs every set is integrated on.
     settings : Route2Settings
@@ -222,8 +224,10 @@ def curves(items, replays, settings: Route2Settings) -> list:
         that met the pole, diverged or failed. Items fail alone.
     """
     if settings.integrator == "loop":
+        if any(len(it) > 3 and it[3] is not None for it in items):
+            raise ValueError("route 2: free-form alphas (alpha_spline) need integrator = 'batched'")
         out = []
-        for prm, model, friction in items:
+        for prm, model, friction, *_ in items:
             cache = {}
             try:
                 out.append([replay_run(prm, r, model, friction, settings, cache) for r in replays])
@@ -249,14 +253,15 @@ def _integrate_requests(requests) -> list:
     (model/README.md), so each request gets what it would get alone.
     """
     settings = requests[0][2]
-    P, H, M, F, A0, T, plan, n = [], [], [], [], [], [], [], 0
+    P, H, M, F, A0, T, S, plan, n = [], [], [], [], [], [], [], [], 0
     for items, replays, _ in requests:
         unique = {}
         for r in replays:
             unique.setdefault(_replay_key(r), r)
         keys, runs = list(unique), list(unique.values())
         grids = [_report_grid(r) for r in runs]
-        for prm, model, friction in items:
+        for prm, model, friction, *spline in items:
+            S += [spline[0] if spline else None] * len(runs)
             P += [prm] * len(runs)
             M += [model] * len(runs)
             F += [friction] * len(runs)
@@ -267,7 +272,7 @@ def _integrate_requests(requests) -> list:
         n += len(items) * len(runs)
     res = simulate_batch(P, H, model=M, friction=F, A0=A0, t_eval=T, rtol=settings.rtol, atol=settings.atol,
                          fallback_method=settings.method, fallback_rtol=settings.rtol, fallback_atol=settings.atol,
-                         fallback_max_steps=settings.max_steps)
+                         fallback_max_steps=settings.max_steps, alpha_spline=S)
     traj = res.table["trajectory"].to_numpy()
     vals = res.table[["A_xx", "A_xy", "sigma_xy_over_p"]].to_numpy()
     lo = np.searchsorted(traj, np.arange(n), side="left")

@@ -28,6 +28,8 @@ def build_parser():
     ap.add_argument("--dem", nargs="+", required=True, help="DEM case directories results/dem/<label>")
     ap.add_argument("--calibration", default=None,
                     help="params.yaml whose Eq. 2 is checked against the collapse (default: <compare>/../calibration/all/params.yaml)")
+    ap.add_argument("--freeform", default=None,
+                    help="a calibration set's freeform.csv (python -m calibrate --freeform): adds claims 9 and 10")
     ap.add_argument("--sets", nargs="*", default=None, help="calibration sets to read (default: every one found)")
     ap.add_argument("--resamples", type=int, default=2000, help="bootstrap resamples (default 2000)")
     ap.add_argument("--seed", type=int, default=0, help="random seed of the bootstrap")
@@ -55,7 +57,8 @@ def main(argv=None) -> int:
         pred = inputs.read_comparison(args.compare, args.sets)
         dem_cases = [inputs.read_dem_case(d) for d in args.dem]
         params = Path(args.calibration) if args.calibration else Path(args.compare).parent / "calibration" / "all" / "params.yaml"
-        tab = table.claims_table(pred, dem_cases, table.eq2_params(params), args.resamples, args.seed)
+        ff = inputs.read_freeform(args.freeform) if args.freeform else None
+        tab = table.claims_table(pred, dem_cases, table.eq2_params(params), args.resamples, args.seed, ff)
         tab.to_csv(out / "paper_claims.csv", index=False, float_format="%.6g")
         report.forest_plot(tab, out / "paper_claims.png")
         pw, cost = power.power_table(inputs.runs(pred), args.dem, tab)

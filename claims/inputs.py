@@ -133,3 +133,11 @@ def read_dem_case(case_dir, protocols=REVERSAL_PROTOCOLS) -> DemCase:
     samples = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(
         columns=["protocol", "X", "mu", "A_xy", "stress_ratio"])
     return DemCase(label=case_dir.name, group=group, steady=steady, samples=samples)
+
+
+FREEFORM_COLUMNS = ("section", "key", "value", "low", "high", "n", "detail")
+
+
+def read_freeform(path) -> pd.DataFrame:
+    """A calibration set's ``freeform.csv`` (``calibrate.freeform.table``); DEMInputError naming the file if bad."""
+    return _read_csv(Path(path), FREEFORM_COLUMNS, "free-form table of python -m calibrate --freeform")

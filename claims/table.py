@@ -296,6 +296,40 @@ def width_row(runs, boot) -> dict:
         f"Model 2 sharper than the DEM in {sharper} of {len(pairs)} runs; {_oos_detail(pairs, missing)}")
 
 
+def freeform_rows(ff: pd.DataFrame) -> list:
+    """Claims 9 and 10 from the free-form fit (``calibrate.freeform``'s ``freeform.csv`` of one calibration set).
+
+    9: any X-dependent Eq. 4 (free-form alpha1(X), alpha2(X)) beats Model 2 on the fall of |A|: the upper
+    bound of the paper's improvement. 10: the data ask for a pole: alpha1 bends down toward the largest X
+    visited (Model 1's c1 <= 0). Both from leave-one-seed-out fits, paired per held-out run (``freeform.csv``).
+    """
+    if ff is None or "section" not in ff or not (ff["section"] == "difference").any():
+        return []
+    by_key = ff.set_index("key")
+    up = by_key.loc["early_A_norm: freeform - model2"]
+    m1 = by_key.loc["early_A_norm: model1 - model2"]
+    b1, b2 = by_key.loc["alpha1 bend at X_hi"], by_key.loc["alpha2 bend at X_hi"]
+    chosen = ff[(ff["section"] == "cv") & ff["detail"].astype(str).str.contains("chosen")]["key"]
+    pen = chosen.iloc[0].replace("penalty_", "") if len(chosen) else "?"
+    return [
+        _row("9", "an X-dependent Eq. 4 can capture the fall of |A| better than Model 2 (upper bound of the "
+             "paper's improvement)", "the paper, Sec. 3.2 (Eq. 4, 6)",
+             f"RMSE of |A| over the first {EARLY_A:g} strain after the reversal, free-form alpha1(X), alpha2(X) "
+             "(penalised splines) minus Model 2, leave-one-seed-out, paired per run, mean per seed",
+             "|A|", 0.0, "<", up["value"], up["low"], up["high"],
+             "paired " + stats.bootstrap_test_name(), int(up["n"]), "seeds (leave-one-seed-out)",
+             f"Model 1 - Model 2 on the same runs {_fmt(m1['value'])} [{_fmt(m1['low'])}, {_fmt(m1['high'])}]; "
+             f"penalty {pen} by cross-validation"),
+        _row("10", "the data ask for a pole: alpha1 bends toward the largest X visited (Model 1's c1 <= 0)",
+             "the paper, Sec. 3.2 (Eq. 6, Fig. 3)",
+             "free-form alpha1(X_hi) - alpha1(0) - alpha1'(0) X_hi, X_hi the largest X visited",
+             "alpha1", 0.0, "<", b1["value"], b1["low"], b1["high"],
+             "jackknife over seeds (leave-one-seed-out fits), +-1.96 s.e.", int(b1["n"]), "seeds",
+             f"alpha2's bend (a pole with c2 >= 0 bends it up): {_fmt(b2['value'])} [{_fmt(b2['low'])}, "
+             f"{_fmt(b2['high'])}]; {b1['detail']}"),
+    ]
+
+
 # --------------------------------------------------------------------------- the table
 
 
@@ -318,7 +352,7 @@ def eq2_params(params_path):
 
 
 def claims_table(pred: pd.DataFrame, dem_cases: list, eq2=None, n_resamples=stats.N_RESAMPLES,
-                 seed=0) -> pd.DataFrame:
+                 seed=0, freeform=None) -> pd.DataFrame:
     """Every claim's row (``COLUMNS``) from the comparison's curves and the DEM cases.
 
     Parameters
@@ -330,6 +364,8 @@ def claims_table(pred: pd.DataFrame, dem_cases: list, eq2=None, n_resamples=stat
         Eq. 2's coefficients (``eq2_params``); row 2b is "not computed" without.
     n_resamples, seed : int
         Bootstrap resamples and their random seed.
+    freeform : DataFrame, optional
+        A calibration set's ``freeform.csv``: adds claims 9 and 10 (``freeform_rows``).
     """
     from .inputs import dem_curves, runs as run_curves
     boot = Bootstrap(n_resamples, seed)
@@ -346,4 +382,5 @@ def claims_table(pred: pd.DataFrame, dem_cases: list, eq2=None, n_resamples=stat
     rows.append(early_error_row(runs, "7", "Model 1's friction is better at the start of the reversal",
                                 "the paper, Sec. 4 (zoom of Fig. 4c)", "mu", "mu", EARLY_MU, boot))
     rows.append(steady_angle_row(steady, boot))
+    rows += freeform_rows(freeform)
     return pd.DataFrame(rows, columns=COLUMNS)

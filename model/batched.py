@@ -135,6 +135,9 @@ def _rate(y, co, out, pole=True):
     :math:`g\alpha_1/2 = h_{a1} + h_{b1g} b + h_{c1} q` with :math:`q = X_+^4/(X_c - X)`.
     Returns the mask of trajectories where Eq. 6 is undefined (X >= X_c), or None when no
     trajectory has a pole (``pole=False``: all Model 2, whose q is 0 and is skipped).
+    With free-form alphas (``co["basis"]``, the design matrix of ``laws.spline_basis``),
+    :math:`\alpha_2/\sqrt2` gains :math:`\sum_k B_k(X) c_{2k}/\sqrt2` (``s2s``) and
+    :math:`g\alpha_1/2` gains :math:`\sum_k B_k(X)\, g c_{1k}/2` (``hs1``).
     """
     b = y[1]
     if pole:
@@ -150,6 +153,10 @@ def _rate(y, co, out, pole=True):
         t1 += co["ha1"]
     else:
         al2, t1 = co["a2s"], co["ha1"]
+    if "basis" in co:                                # free-form alphas (laws.AlphaSpline), shared breaks
+        B = co["basis"](co["sq2g"] * b).T            # (K, n)
+        al2 = al2 + (B * co["s2s"]).sum(axis=0)
+        t1 = t1 + (B * co["hs1"]).sum(axis=0)
     al2 = al2 + co["b2g"] * b                        # alpha2 / sqrt2
     np.multiply(al2, y, out=out)                     # alpha2 (a, b) / sqrt2
     out += co["gs"] * y[::-1]                        # + (g b, -g a)
@@ -189,7 +196,7 @@ class _Solver:
     when the arrays are compacted.
     """
 
-    def __init__(self, coef, A0, g, L, poff, out_piece, out_s, ooff, rtol, atol, h_min, max_steps):
+    def __init__(self, coef, A0, g, L, poff, out_piece, out_s, ooff, rtol, atol, h_min, max_steps, spline=None):
         n = len(A0)
         self.g_all, self.L_all = g, L
         self.out_s = out_s
@@ -214,13 +221,22 @@ class _Solver:
             "a2s": a2 / SQRT2, "b2s": b2 / SQRT2, "c2s": c2 / SQRT2, "maxn": np.asarray(max_steps).copy(),
             **{c: np.ones(n) for c in ("sq2g", "b2g", "ha1", "hb1g", "hc1")}, "gs": np.ones((2, n)),
         }
+        self.basis = None
+        if spline is not None:   # (basis(X) -> (n, K), S (n, 2, K)): see _rate
+            self.basis, S = spline
+            self.w.update(s1=S[:, 0, :].T.copy(), hs1=np.zeros((S.shape[2], n)), s2s=S[:, 1, :].T / SQRT2)
         with np.errstate(all="ignore"):
             self._enter(np.arange(n))
 
     def _co(self, sl=None):
         w = self.w
         keys = ("sq2g", "X_c", "a2s", "b2g", "c2s", "gs", "ha1", "hb1g", "hc1")
-        return {c: w[c] for c in keys} if sl is None else {c: w[c][..., sl] for c in keys}
+        if self.basis is not None:
+            keys += ("hs1", "s2s")
+        co = {c: w[c] for c in keys} if sl is None else {c: w[c][..., sl] for c in keys}
+        if self.basis is not None:
+            co["basis"] = self.basis
+        return co
 
     def _stop(self, sl, code):
         """Take slots ``sl`` out of the batch with status ``code``."""
@@ -270,6 +286,8 @@ class _Solver:
             w["b2g"][sl] = w["b2s"][sl] * w["sq2g"][sl]
             w["ha1"][sl], w["hc1"][sl] = 0.5 * g * w["a1"][sl], 0.5 * g * w["c1"][sl]
             w["hb1g"][sl] = 0.5 * g * w["b1"][sl] * w["sq2g"][sl]
+            if self.basis is not None:
+                w["hs1"][:, sl] = 0.5 * g * w["s1"][:, sl]
             w["Lk"][sl], w["s"][sl] = self.L_all[k], 0.0
             pole = ~(w["sq2g"][sl] * w["y"][1, sl] < w["X_c"][sl])   # a reversal mirrors X past X_c
             self._stop(sl[pole], _POLE_START)
@@ -556,7 +574,7 @@ def _is_pair(v):
 def simulate_batch(params, histories, model="model1", A0=None, friction="eq2", strain_eval=None, t_eval=None,
                    points_per_strain=POINTS_PER_STRAIN, rtol=BATCH_RTOL, atol=BATCH_ATOL, h_min=BATCH_H_MIN,
                    max_steps=None, fallback_method=DEFAULT_METHOD, fallback_rtol=DEFAULT_RTOL,
-                   fallback_atol=DEFAULT_ATOL, fallback_max_steps=None) -> BatchResult:
+                   fallback_atol=DEFAULT_ATOL, fallback_max_steps=None, alpha_spline=None) -> BatchResult:
     r"""Integrate Eq. 4 for N simple-shear trajectories at once (see the module Notes).
 
     Every argument that ``simulate`` takes per run may be given once (shared by the
@@ -585,6 +603,12 @@ def simulate_batch(params, histories, model="model1", A0=None, friction="eq2", s
     fallback_method, fallback_rtol, fallback_atol, fallback_max_steps
         Passed to ``simulate`` (``method``, ``rtol``, ``atol``, ``max_steps``) for the
         trajectories the batch hands over.
+    alpha_spline : laws.AlphaSpline, None, or a sequence of them
+        Free-form coefficients: a trajectory with one takes alpha1, alpha2 from it
+        instead of its ``model`` block (the friction law is still ``friction``'s);
+        it needs an explicit ``A0``, and every spline of a batch must share its
+        breaks. ``simulate`` has no spline law, so such a trajectory that the batch
+        cannot finish fails with a ``RuntimeError`` instead of falling back.
 
     Returns
     -------
@@ -599,20 +623,22 @@ def simulate_batch(params, histories, model="model1", A0=None, friction="eq2", s
         different lengths (the message names the argument). Per-trajectory failures of
         the integration are never raised: they are in ``status`` and ``errors``.
     """
-    lists, n = _per_trajectory_lists(params, histories, model, A0, friction, strain_eval, t_eval)
+    lists, n = _per_trajectory_lists(params, histories, model, A0, friction, strain_eval, t_eval, alpha_spline)
     _check_options(rtol, atol, h_min, fallback_method)
     P, coef, fric, A0s, lays, errors = _batch_inputs(lists, n, points_per_strain)
+    spline = _spline_inputs(lists["alpha_spline"], coef)
     poff, rows, ooff, out_piece = _offsets(lays)
-    solver = _integrate_batch(coef, A0s, lays, poff, rows, ooff, out_piece, rtol, atol, h_min, max_steps)
+    solver = _integrate_batch(coef, A0s, lays, poff, rows, ooff, out_piece, rtol, atol, h_min, max_steps, spline)
     cols, traj, code = _batch_table(solver, lays, lists["friction"], coef, fric, rows, out_piece, n)
     fallback = dict(method=fallback_method, rtol=fallback_rtol, atol=fallback_atol, max_steps=fallback_max_steps)
     _fall_back(code, errors, cols, solver, lists, P, A0s, poff, rows, points_per_strain, fallback)
     return _batch_result(cols, traj, rows, code, errors, solver.steps, n)
 
 
-def _per_trajectory_lists(params, histories, model, A0, friction, strain_eval, t_eval):
+def _per_trajectory_lists(params, histories, model, A0, friction, strain_eval, t_eval, alpha_spline=None):
     """The per-trajectory arguments as lists of N (a single value broadcast), and N; ValueError if lengths differ."""
     seqs = {"params": (params, lambda v: not isinstance(v, (list, tuple))),
+            "alpha_spline": (alpha_spline, lambda v: v is None or isinstance(v, laws.AlphaSpline)),
             "histories": (histories, lambda v: isinstance(v, History)),
             "model": (model, lambda v: isinstance(v, str)),
             "A0": (A0, _is_pair), "friction": (friction, lambda v: isinstance(v, str)),
@@ -668,6 +694,8 @@ def _batch_inputs(lists, n, points_per_strain):
         coef[i] = _coefficients(p, m)
         fric[i] = _friction_row(p, fr)
         a0 = lists["A0"][i]
+        if lists["alpha_spline"][i] is not None and a0 is None:
+            raise ValueError(f"{label}: a trajectory with alpha_spline needs an explicit A0")
         key = (id(p), m, lay.g[0]) if a0 is None else None
         try:
             if key is not None and key in a0_cache:
@@ -680,6 +708,27 @@ def _batch_inputs(lists, n, points_per_strain):
             errors[i] = exc
             A0s[i] = 0.0
     return P, coef, fric, A0s, lays, errors
+
+
+def _spline_inputs(splines, coef):
+    """``(basis, S)`` for the solver, or None without splines; zeroes ``coef`` of the spline trajectories.
+
+    ``S`` (N, 2, K) holds each trajectory's coefficients of alpha1 and alpha2 (zero
+    for a trajectory without a spline); ``basis(X)`` is ``laws.spline_basis`` on the
+    breaks every spline of the batch shares (ValueError otherwise).
+    """
+    have = [i for i, sp in enumerate(splines) if sp is not None]
+    if not have:
+        return None
+    breaks = {splines[i].breaks for i in have}
+    if len(breaks) > 1:
+        raise ValueError(f"alpha_spline: every spline of a batch must share its breaks, got {len(breaks)} sets")
+    (br,) = breaks
+    S = np.zeros((len(splines), 2, laws.spline_size(br)))
+    for i in have:
+        S[i] = splines[i].c1, splines[i].c2
+        coef[i] = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, math.inf)
+    return (lambda X: laws.spline_basis(X, br)), S
 
 
 def _offsets(lays):
@@ -695,7 +744,7 @@ def _offsets(lays):
     return poff, rows, ooff, out_piece
 
 
-def _integrate_batch(coef, A0s, lays, poff, rows, ooff, out_piece, rtol, atol, h_min, max_steps):
+def _integrate_batch(coef, A0s, lays, poff, rows, ooff, out_piece, rtol, atol, h_min, max_steps, spline=None):
     """Run the batched Dormand-Prince 5(4) over all trajectories; the finished ``_Solver``.
 
     Each trajectory's step budget is ``max_steps``, or by default
@@ -708,7 +757,7 @@ def _integrate_batch(coef, A0s, lays, poff, rows, ooff, out_piece, rtol, atol, h
         else np.full(n, int(max_steps))
     A0_run = A0s.copy()
     return _Solver(coef, A0_run, np.concatenate([x.g for x in lays]), np.concatenate([x.L for x in lays]),
-                   poff, out_piece, out_s, ooff, rtol, atol, h_min, budget).run()
+                   poff, out_piece, out_s, ooff, rtol, atol, h_min, budget, spline).run()
 
 
 def _batch_table(solver, lays, frictions, coef, fric, rows, out_piece, n):
@@ -767,6 +816,10 @@ def _fall_back(code, errors, cols, solver, lists, P, A0s, poff, rows, points_per
             errors[i] = FabricDivergence(_time_at(seg, s_k), a_k, b_k)
     for i in np.flatnonzero(~in_batch):
         if errors[i] is not None:
+            continue
+        if lists["alpha_spline"][i] is not None:
+            errors[i] = RuntimeError(f"free-form alphas: the batch could not finish this trajectory "
+                                     f"({FALLBACK_REASONS.get(code[i], code[i])}) and simulate has no spline law")
             continue
         try:
             tab = simulate(P[i], lists["histories"][i], model=lists["model"][i], A0=A0s[i],

@@ -167,3 +167,108 @@ def fabric_norm(a, b):
 def fabric_angle_deg(a, b):
     """Major principal direction of A in degrees, counter-clockwise from x, in [0, 180)."""
     return np.mod(np.degrees(0.5 * np.arctan2(b, a)), 180.0)
+
+
+class AlphaSpline:
+    r"""Free-form coefficients of Eq. 4: alpha1(X), alpha2(X) as cubic B-splines.
+
+    Parameters
+    ----------
+    breaks : sequence of float
+        Increasing breakpoints :math:`x_0 < \dots < x_m` (the X range the data visit).
+    c1, c2 : sequence of float
+        The ``m + 3`` B-spline coefficients of alpha1 and alpha2.
+
+    Notes
+    -----
+    With the clamped cubic knot vector on the breaks and its basis :math:`B_k`,
+
+    .. math::
+        \alpha_i(X) = \sum_k c_{ik}\, \tilde B_k(X), \qquad
+        \tilde B_k(X) = B_k(\bar X) + (X - \bar X)\, B_k'(\bar X),\quad
+        \bar X = \min(\max(X, x_0), x_m),
+
+    the spline inside the breaks, continued linearly (value and slope of the
+    end) outside them. A linear law :math:`a + bX` is represented exactly, and
+    stays exact outside the breaks. No pole: ``X_c`` is infinite.
+    """
+
+    degree = 3
+
+    def __init__(self, breaks, c1, c2):
+        self.breaks = tuple(float(x) for x in breaks)
+        if len(self.breaks) < 2 or not np.all(np.diff(self.breaks) > 0):
+            raise ValueError(f"AlphaSpline: breaks must be at least 2 increasing values, got {self.breaks}")
+        self.c1, self.c2 = np.asarray(c1, dtype=float), np.asarray(c2, dtype=float)
+        n = spline_size(self.breaks)
+        if self.c1.shape != (n,) or self.c2.shape != (n,):
+            raise ValueError(f"AlphaSpline: {len(self.breaks)} breaks need {n} coefficients per alpha, "
+                             f"got {self.c1.shape} and {self.c2.shape}")
+
+    def __call__(self, X):
+        """``(alpha1, alpha2)`` at X (floats for a float, arrays for an array)."""
+        B = spline_basis(np.atleast_1d(np.asarray(X, dtype=float)), self.breaks)
+        a1, a2 = B @ self.c1, B @ self.c2
+        if np.ndim(X) == 0:
+            return float(a1[0]), float(a2[0])
+        return a1, a2
+
+
+def spline_knots(breaks):
+    """Clamped knot vector of the cubic B-splines on ``breaks`` (ends repeated 4 times)."""
+    b = np.asarray(breaks, dtype=float)
+    return np.concatenate([[b[0]] * 3, b, [b[-1]] * 3])
+
+
+def spline_size(breaks) -> int:
+    """Number of cubic B-spline basis functions on ``breaks``: ``len(breaks) + 2``."""
+    return len(breaks) + 2
+
+
+_BASIS_ENDS = {}
+
+
+def _basis_ends(breaks):
+    """Basis values and slopes at both ends of the breaks (cached per breaks)."""
+    if breaks not in _BASIS_ENDS:
+        from scipy.interpolate import BSpline
+
+        t, k, n = spline_knots(breaks), AlphaSpline.degree, spline_size(breaks)
+        basis = BSpline(t, np.eye(n), k)
+        ends = np.array([breaks[0], breaks[-1]])
+        _BASIS_ENDS[breaks] = (basis(ends), basis.derivative()(ends))
+    return _BASIS_ENDS[breaks]
+
+
+def spline_basis(X, breaks) -> np.ndarray:
+    r"""Design matrix :math:`\tilde B_k(X)` (shape ``(len(X), len(breaks) + 2)``) of ``AlphaSpline``.
+
+    Inside the breaks it is ``scipy.interpolate.BSpline.design_matrix``; outside,
+    the value and slope at the nearer end (linear continuation, see ``AlphaSpline``).
+    """
+    from scipy.interpolate import BSpline
+
+    breaks = tuple(float(x) for x in breaks)
+    X = np.asarray(X, dtype=float)
+    lo, hi = breaks[0], breaks[-1]
+    Xb = np.clip(np.nan_to_num(X, nan=lo), lo, hi)
+    B = BSpline.design_matrix(Xb, spline_knots(breaks), AlphaSpline.degree).toarray()
+    below, above = X < lo, X > hi
+    if below.any() or above.any():
+        (v_lo, v_hi), (d_lo, d_hi) = _basis_ends(breaks)
+        B[below] = v_lo + (X[below] - lo)[:, None] * d_lo
+        B[above] = v_hi + (X[above] - hi)[:, None] * d_hi
+    B[np.isnan(X)] = np.nan
+    return B
+
+
+def spline_of_linear(breaks, a1, b1, a2, b2) -> AlphaSpline:
+    """The ``AlphaSpline`` equal to ``alpha1 = a1 + b1 X``, ``alpha2 = a2 + b2 X`` everywhere.
+
+    Cubic B-splines reproduce a linear function with the Greville abscissae as
+    coefficients: :math:`X = \\sum_k \\xi_k B_k(X)`, :math:`\\xi_k` the mean of knots k+1..k+3.
+    """
+    t = spline_knots(breaks)
+    n = spline_size(breaks)
+    xi = np.array([t[k + 1:k + 4].mean() for k in range(n)])
+    return AlphaSpline(breaks, a1 + b1 * xi, a2 + b2 * xi)

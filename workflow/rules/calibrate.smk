@@ -20,6 +20,9 @@ CALIBRATION_EXTRA = {
     "heldout": "heldout_scores.csv",
     "curves": "fig_curves_model_vs_dem.png",
 }
+# calibration.freeform: the free-form alpha1(X), alpha2(X) fit (calibrate/freeform.py), its table
+# beside the others and its curves on Figs. 3a, 3b.
+CALIBRATION_FREEFORM = bool(config.get("calibration", {}).get("freeform", False))
 # calibrate writes heldout_scores.csv only when a bootstrap replicate held a seed
 # out (never with one seed): the rule then leaves its header alone in the file.
 HELDOUT_HEADER = "replicate,route,model,n_heldout_runs"
@@ -57,10 +60,23 @@ rule calibrate:
             for name in CALIBRATION_FIGURES
         ],
         **{key: f"{RESULTS}/calibration/{{calset}}/{name}" for key, name in CALIBRATION_EXTRA.items()},
+        **(
+            {
+                "freeform": report(
+                    f"{RESULTS}/calibration/{{calset}}/freeform.csv",
+                    caption="../report/freeform.rst",
+                    category="Calibration",
+                    subcategory="{calset}",
+                )
+            }
+            if CALIBRATION_FREEFORM
+            else {}
+        ),
     params:
         dirs=lambda wc: [case_dir(label) for label in CALIBRATION_SETS[wc.calset]["cases"]],
         protocols=lambda wc: CALIBRATION_SETS[wc.calset]["protocols"],
         options=config.get("calibration", {}).get("options", ""),
+        freeform="--freeform" if CALIBRATION_FREEFORM else "",
         out=lambda wc: f"{RESULTS}/calibration/{wc.calset}",
     resources:
         runtime=COST_CALIBRATE.runtime,
@@ -72,7 +88,7 @@ rule calibrate:
     threads: 1
     shell:
         "{PY} -m calibrate --dem {params.dirs} --protocols {params.protocols}"
-        " --out {params.out} {params.options} > {log} 2>&1"
+        " --out {params.out} {params.freeform} {params.options} > {log} 2>&1"
         " && {{ test -e {output.heldout} || echo {HELDOUT_HEADER} > {output.heldout}; }}"
 
 

@@ -4,7 +4,8 @@
 # power.csv: seeds (and DEM volume, core-hours) needed to decide claims 4 and 7 at
 # 95 % with 80 % power, with whether the paper (and bulk) preset reach it.
 # Reads every calibration set's predictions.csv and errors.csv (the model comparisons
-# use only runs a set was not calibrated on), the DEM series, and set "all"'s Eq. 2.
+# use only runs a set was not calibrated on), the DEM series, and set "all"'s Eq. 2
+# (and its freeform.csv with calibration.freeform: claims 9 and 10, the free-form upper bound).
 # Optional config keys under `claims:` (all have defaults):
 #   resamples: bootstrap resamples (2000)
 
@@ -32,6 +33,7 @@ rule claims:
         params=calibration_params("all"),
         sidecars=dem_sidecars,
         presets=list(CLAIMS_PRESETS.values()),
+        **({"freeform": f"{RESULTS}/calibration/all/freeform.csv"} if CALIBRATION_FREEFORM else {}),
     output:
         table=report(
             f"{CLAIMS}/paper_claims.csv",
@@ -54,6 +56,7 @@ rule claims:
         sets=list(CALIBRATION_SETS),
         resamples=CLAIMS_RESAMPLES,
         presets=" ".join(f"{name}={path}" for name, path in CLAIMS_PRESETS.items()),
+        freeform=f"--freeform {RESULTS}/calibration/all/freeform.csv" if CALIBRATION_FREEFORM else "",
     resources:
         runtime=COST_CLAIMS.runtime,
         mem_mb=COST_CLAIMS.mem_mb,
@@ -64,7 +67,8 @@ rule claims:
     threads: 1
     shell:
         "{PY} -m claims --compare {COMPARE} --dem {params.dirs} --calibration {input.params}"
-        " --sets {params.sets} --resamples {params.resamples} --preset {params.presets} --out {CLAIMS} > {log} 2>&1"
+        " --sets {params.sets} --resamples {params.resamples} --preset {params.presets} {params.freeform}"
+        " --out {CLAIMS} > {log} 2>&1"
 
 
 def claims_targets():

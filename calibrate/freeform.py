@@ -1,0 +1,391 @@
+r"""Free-form alpha1(X), alpha2(X): the upper bound of any X-dependent Eq. 4 (issue 13, part 3).
+
+Method
+------
+Eq. 4 with alpha1, alpha2 any smooth functions of X (``model.laws.AlphaSpline``:
+cubic B-splines on ``n_breaks`` evenly spaced breaks over the X the samples
+visit, from their 0.5th to their 99.5th percentile, continued linearly outside) is fitted by trajectory fitting on the
+residuals of route 2 (``route2.curves``, ``route2._residual_vector`` and the
+steady residuals of ``fits``), plus a roughness penalty
+
+.. math::
+    \lambda \sum_{i=1,2} \int_{x_0}^{x_m} \alpha_i''(X)^2\, dX = \lambda \sum_i |R c_i|^2
+
+over the breaks, exact (``roughness_matrix``): a straight line costs nothing,
+so the penalty shrinks toward linear alphas (Model 2's law, with alpha1 free
+to have a slope), not toward zero. The friction law is held as route 2
+holds Model 2's (the quadratic law of [15]), so the free-form fit and Model 2
+differ only in their alphas. The start is Model 2's route-2 fit, represented
+exactly (``laws.spline_of_linear``).
+
+Penalty by cross-validation: leave one seed (DEM case) out; for every
+:math:`\lambda` of ``penalties`` the fit on the other seeds predicts the held-out
+seed's runs; the :math:`\lambda` with the lowest held-out mean squared
+normalised residual (route 2's objective) wins and is refitted on every seed.
+Model 1 and Model 2 are refitted by route 2 on the same folds (from their
+full-data fits, ``cv_evals`` evaluations), so every held-out run is predicted
+by the three laws calibrated without its seed: paired errors per run, averaged
+per seed, with a bootstrap interval over seeds (``claims.stats.mean_interval``).
+
+Scores per held-out run: RMS error of |A| over the first ``early_strain`` of
+path strain after the first reversal (the claims table's window), and of
+|A|, theta_A (degrees, axial) and the signed friction over the whole run.
+
+Band: the leave-one-seed-out fits at the chosen :math:`\lambda` are a
+jackknife; the band is the full fit :math:`\pm 1.96` jackknife standard errors,
+:math:`\mathrm{se}^2 = \frac{n-1}{n}\sum_j (\hat\alpha_{(j)} - \bar\alpha)^2`.
+
+Pole: the bend of each alpha at the largest X visited beyond its tangent at
+X = 0, :math:`e_i = \alpha_i(X_{hi}) - \alpha_i(0) - \alpha_i'(0) X_{hi}`
+(Model 1's pole term :math:`c_i X^4/(X_c - X)` is such a bend), with its
+jackknife interval.
+
+Everything runs in one ``route2.Lockstep`` (each fit a thread; their
+integrations one ``simulate_batch`` call per round).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, replace
+
+import numpy as np
+import pandas as pd
+from scipy.optimize import least_squares
+
+from claims.stats import mean_interval
+from dem_contract import angle_difference, fabric_angle_deg, fabric_norm
+from model import params_from_dict
+from model.laws import AlphaSpline, spline_basis, spline_of_linear, spline_size
+
+from . import fits, route2
+
+SCORES = ("early_A_norm", "A_norm", "theta_A", "mu")
+LAWS = ("freeform", "model1", "model2")
+Z95 = 1.959963984540054
+
+
+@dataclass(frozen=True)
+class FreeformSettings:
+    n_breaks: int = 5                                   # breaks over the X range visited (K = n_breaks + 2 per alpha)
+    penalties: tuple = (1e-6, 1e-4, 1e-2, 1.0)           # lambda grid of the cross-validation
+    max_evals: int = 180                                # model evaluations of the final fit (Jacobian points count)
+    cv_evals: int = 60                                  # ... of each cross-validation fit
+    early_strain: float = 0.1
+    friction: str = "quadratic"                         # Model 2's, as route 2 holds it
+    n_resamples: int = 2000
+
+    def __post_init__(self):
+        if not (isinstance(self.n_breaks, int) and self.n_breaks >= 2):
+            raise ValueError(f"free-form fit: n_breaks = {self.n_breaks!r} must be an integer >= 2")
+        if not (len(self.penalties) and all(p > 0 for p in self.penalties)):
+            raise ValueError(f"free-form fit: penalties = {self.penalties!r} must be positive numbers")
+
+    def as_dict(self) -> dict:
+        return {k: (list(v) if isinstance(v, tuple) else v) for k, v in asdict(self).items()}
+
+
+def sample_X(replays) -> np.ndarray:
+    """X = sqrt2 g A_xy of every sample of every replay."""
+    return np.concatenate([np.sqrt(2.0) * r.g * r.b for r in replays])
+
+
+#: Percentiles of the samples' X spanned by the breaks (single noisy samples do not stretch the range).
+X_RANGE = (0.5, 99.5)
+
+
+def breaks_for(replays, n_breaks: int) -> tuple:
+    """``n_breaks`` evenly spaced breaks over the X the samples visit (percentiles ``X_RANGE``)."""
+    lo, hi = np.percentile(sample_X(replays), X_RANGE)
+    return tuple(np.linspace(float(lo), float(hi), n_breaks))
+
+
+def roughness_matrix(breaks) -> np.ndarray:
+    r"""R with :math:`\int_{x_0}^{x_m} \alpha''(X)^2\,dX = |R c|^2` for the cubic B-splines on ``breaks``.
+
+    :math:`\alpha''` is linear on each interval, so two-point Gauss-Legendre
+    quadrature per interval is exact: the rows of R are :math:`\sqrt{w_q} B_k''(x_q)`.
+    """
+    from scipy.interpolate import BSpline
+
+    from model.laws import spline_knots
+
+    b = np.asarray(breaks, dtype=float)
+    g, w = np.polynomial.legendre.leggauss(2)
+    mid, half = 0.5 * (b[1:] + b[:-1]), 0.5 * np.diff(b)
+    xq = (mid[:, None] + half[:, None] * g[None, :]).ravel()
+    wq = (half[:, None] * w[None, :]).ravel()
+    d2 = BSpline(spline_knots(b), np.eye(spline_size(b)), 3).derivative(2)(xq)   # (n_q, K)
+    return np.sqrt(wq)[:, None] * d2
+
+
+def _penalty_rows(spline: AlphaSpline, lam: float) -> np.ndarray:
+    r"""Residual rows of the roughness penalty: :math:`\sqrt\lambda\, R c_i` for both alphas (``roughness_matrix``)."""
+    R = roughness_matrix(spline.breaks)
+    return math.sqrt(lam) * np.concatenate([R @ spline.c1, R @ spline.c2])
+
+
+def fit_spline(replays, doc: dict, start: AlphaSpline, steady: dict, sigma_mu: float, lam: float,
+               settings: FreeformSettings, s2: route2.Route2Settings, max_evals: int):
+    r"""Penalised least-squares fit of the spline coefficients to the replays (module Notes).
+
+    Returns
+    -------
+    spline : AlphaSpline
+        The best point seen (the start if nothing better was integrated).
+    info : dict
+        ``cost``, ``evaluations``, ``failed_evaluations``, ``message``.
+    """
+    prm = params_from_dict(doc)
+    K = spline_size(start.breaks)
+    n_res = sum(3 * len(r.s) for r in replays) + fits.N_STEADY + 2 * len(roughness_matrix(start.breaks))
+    state = {"n": 0, "fails": 0, "best": None, "best_cost": np.inf}
+    ready = {}
+
+    def unpack(p):
+        return AlphaSpline(start.breaks, p[:K], p[K:])
+
+    def evaluate(points):
+        sps = [unpack(p) for p in points]
+        got = route2.curves([(prm, "model2", settings.friction, sp) for sp in sps], replays, s2)
+        out = []
+        for sp, c in zip(sps, got):
+            if isinstance(c, Exception):
+                out.append(None)
+                continue
+            s1, a2 = sp(float(steady["X"]))
+            r = np.concatenate([route2._residual_vector(c, replays, sigma_mu, s2),
+                                fits._steady_fabric_residuals(s1, a2, steady, s2.steady_weight),
+                                _penalty_rows(sp, lam)])
+            out.append(r if np.all(np.isfinite(r)) else None)
+        return out
+
+    def res(p):
+        if state["n"] >= max_evals:
+            raise route2._Budget
+        state["n"] += 1
+        key = np.asarray(p, dtype=float).tobytes()
+        r = ready.pop(key) if key in ready else evaluate([p])[0]
+        if r is None:
+            state["fails"] += 1
+            r = np.full(n_res, route2.PENALTY)
+        cost = 0.5 * float(r @ r)
+        if cost < state["best_cost"]:
+            state["best_cost"], state["best"] = cost, np.array(p, dtype=float)
+        return r
+
+    def workers(fun, points):
+        points = [np.array(x, dtype=float) for x in points]
+        ready.clear()
+        ready.update(zip((x.tobytes() for x in points), evaluate(points)))
+        return [fun(x) for x in points]
+
+    x0 = np.concatenate([start.c1, start.c2])
+    message = ""
+    try:
+        sol = least_squares(res, x0, x_scale="jac", diff_step=s2.diff_step, max_nfev=max_evals, workers=workers)
+        message = sol.message
+    except route2._Budget:
+        message = f"budget of {max_evals} model evaluations used up; best point kept"
+    best = state["best"] if state["best"] is not None else x0
+    return unpack(best), {"cost": state["best_cost"], "evaluations": state["n"],
+                          "failed_evaluations": state["fails"], "message": message}
+
+
+def reversal_strain(replay) -> float:
+    """Path strain of the run's first reversal: the end of its leading pieces sheared as the pre-shear was.
+
+    The pre-shear's sign is the one for which the run's start is a steady state,
+    X = sqrt2 g A_xy < 0 (docs/model.md, Sec. 3): g = -sign(A_xy at the start).
+    """
+    g_pre = -np.sign(replay.A0[1])
+    s = 0.0
+    for g, length in replay.pieces:
+        if g != g_pre:
+            return s
+        s += length
+    return s
+
+
+def run_errors(c, replay, early_strain: float) -> dict:
+    """RMS errors of one run's model curve ``c`` (a, b, signed mu at the samples) against its DEM samples."""
+    dA = fabric_norm(c[:, 0], c[:, 1]) - fabric_norm(replay.a, replay.b)
+    dth = angle_difference(fabric_angle_deg(c[:, 0], c[:, 1]), fabric_angle_deg(replay.a, replay.b))
+    s_rev = reversal_strain(replay)
+    early = (replay.s > s_rev) & (replay.s <= s_rev + early_strain)
+    rms = lambda v: float(np.sqrt(np.mean(v**2))) if v.size else math.nan  # noqa: E731
+    return {"early_A_norm": rms(dA[early]), "A_norm": rms(dA), "theta_A": rms(dth), "mu": rms(c[:, 2] - replay.mu)}
+
+
+def _heldout(items, held, s2, sigma_mu, early_strain) -> list:
+    """Per item (params, model, friction[, spline]): (mean squared normalised residual, per-run errors) on ``held``."""
+    out = []
+    for c in route2.curves(items, held, s2):
+        if isinstance(c, Exception):
+            out.append((math.inf, [{k: math.nan for k in SCORES} for _ in held]))
+            continue
+        z = route2._residual_vector(c, held, sigma_mu, s2)
+        out.append((float(np.mean(z**2)), [run_errors(m, r, early_strain) for m, r in zip(c, held)]))
+    return out
+
+
+def _fold_job(k, case, replays, doc2, start, steady, sigma_mu, settings, s2):
+    """One fold: spline fits at every penalty and route-2 refits of both models without ``case``; held-out scores."""
+    train = [r for r in replays if r.case != case]
+    held = [r for r in replays if r.case == case]
+
+    def job():
+        sps = [fit_spline(train, doc2, start, steady, sigma_mu, lam, settings, s2, settings.cv_evals)[0]
+               for lam in settings.penalties]
+        s2m = replace(s2, max_evals=settings.cv_evals)
+        refit = {m: route2.fit(train, doc2, m, doc2[m], steady, sigma_mu, s2m).values for m in ("model1", "model2")}
+        prm = params_from_dict(doc2)
+        items = [(prm, "model2", settings.friction, sp) for sp in sps]
+        for m in ("model1", "model2"):
+            d = dict(doc2)
+            d[m] = refit[m]
+            items.append((params_from_dict(d), m, "eq2" if m == "model1" else "quadratic"))
+        scores = _heldout(items, held, s2, sigma_mu, settings.early_strain)
+        return {"case": case, "splines": sps, "held": [r.label for r in held],
+                "cv": [s[0] for s in scores[:len(sps)]], "errors": {"spline": [s[1] for s in scores[:len(sps)]],
+                                                                    "model1": scores[-2][1], "model2": scores[-1][1]}}
+    return job
+
+
+def run(replays, doc2: dict, steady: dict, sigma_mu: float, s2: route2.Route2Settings,
+        settings: FreeformSettings = FreeformSettings(), log=print) -> dict:
+    """Cross-validate the penalty, fit the free-form law on every seed, score it against Models 1 and 2.
+
+    Parameters
+    ----------
+    replays : list of route2.Replay
+    doc2 : dict
+        The route-2 parameter document (friction laws and both models' fits).
+    steady, sigma_mu
+        As for ``route2.fit``.
+    s2 : route2.Route2Settings
+        Tolerances (the integrator must be "batched").
+
+    Returns
+    -------
+    dict
+        ``spline`` (AlphaSpline, final fit), ``penalty``, ``cv`` (DataFrame: penalty, cv_score),
+        ``folds`` (jackknife AlphaSplines at the chosen penalty), ``errors`` (DataFrame: one row
+        per held-out run and law), ``table`` (the ``freeform.csv`` DataFrame), ``fit`` (info).
+    """
+    if s2.integrator != "batched":
+        raise ValueError("free-form fit: needs the batched integrator (--integrator batched)")
+    br = breaks_for(replays, settings.n_breaks)
+    m2 = doc2["model2"]
+    start = spline_of_linear(br, m2["c1"], 0.0, m2["c2"], m2["c3"])
+    cases = sorted({r.case for r in replays})
+    if len(cases) < 2:
+        raise ValueError(f"free-form fit: cross-validation leaves one seed out and needs 2 or more, got {cases}")
+    jobs = [_fold_job(k, c, replays, doc2, start, steady, sigma_mu, settings, s2) for k, c in enumerate(cases)]
+    finals = [(lambda lam=lam: fit_spline(replays, doc2, start, steady, sigma_mu, lam, settings, s2,
+                                          settings.max_evals)) for lam in settings.penalties]
+    done = route2.Lockstep().run(jobs + finals)
+    folds, fulls = done[:len(jobs)], done[len(jobs):]
+    cv = np.array([sum(f["cv"][j] * len(f["held"]) for f in folds) / sum(len(f["held"]) for f in folds)
+                   for j in range(len(settings.penalties))])
+    j = int(np.nanargmin(np.where(np.isfinite(cv), cv, np.nan))) if np.isfinite(cv).any() else 0
+    spline, info = fulls[j]
+    log(f"free-form: penalty {settings.penalties[j]:g} chosen by leave-one-seed-out CV "
+        f"({', '.join(f'{p:g}: {c:.4g}' for p, c in zip(settings.penalties, cv))}); final fit {info['message']}")
+    rows = []
+    for f in folds:
+        for law, errs in (("freeform", f["errors"]["spline"][j]), ("model1", f["errors"]["model1"]),
+                          ("model2", f["errors"]["model2"])):
+            for label, e in zip(f["held"], errs):
+                rows.append({"case": f["case"], "run": label, "law": law, **e})
+    errors = pd.DataFrame(rows)
+    fold_splines = [f["splines"][j] for f in folds]
+    out = {"spline": spline, "penalty": settings.penalties[j], "fit": info, "folds": fold_splines, "errors": errors,
+           "cv": pd.DataFrame({"penalty": settings.penalties, "cv_score": cv,
+                               "failed_folds": [sum(not np.isfinite(f["cv"][k]) for f in folds)
+                                                for k in range(len(settings.penalties))]})}
+    out["table"] = table(out, settings)
+    return out
+
+
+def jackknife_band(full: AlphaSpline, folds, X) -> tuple:
+    """(alpha1, alpha2) of the full fit at X and their jackknife standard errors (module Notes)."""
+    a = np.array(full(X))                                        # (2, len(X))
+    reps = np.array([f(X) for f in folds])                       # (n, 2, len(X))
+    n = len(folds)
+    se = np.sqrt((n - 1) / n * ((reps - reps.mean(axis=0)) ** 2).sum(axis=0)) if n > 1 else np.full_like(a, np.nan)
+    return a, se
+
+
+def pole_bend(spline: AlphaSpline, X_hi: float) -> np.ndarray:
+    """e_i = alpha_i(X_hi) - alpha_i(0) - alpha_i'(0) X_hi for i = 1, 2 (module Notes); NaN if X_hi <= 0."""
+    if not X_hi > 0:
+        return np.full(2, np.nan)
+    h = 1e-6
+    v0, vp, vm, vhi = (np.array(spline(x)) for x in (0.0, h, -h, X_hi))
+    return vhi - v0 - (vp - vm) / (2 * h) * X_hi
+
+
+def paired(errors: pd.DataFrame, law: str, ref: str, score: str, n_resamples: int):
+    """Estimate, low, high, n of the per-seed mean of ``law - ref`` (paired per run), over seeds."""
+    wide = errors.pivot_table(index=["case", "run"], columns="law", values=score)
+    d = (wide[law] - wide[ref]).groupby(level="case").mean()
+    return mean_interval(d.to_numpy(), n_resamples=n_resamples)
+
+
+def note_table(note: str) -> pd.DataFrame:
+    """``freeform.csv`` when the fit cannot run (e.g. one seed): one row, ``section`` = note."""
+    return pd.DataFrame([dict(section="note", key="not fitted", value=math.nan, low=math.nan, high=math.nan,
+                              n=math.nan, detail=note)])
+
+
+def table(res: dict, settings: FreeformSettings) -> pd.DataFrame:
+    """``freeform.csv``: breaks, coefficients, CV scores, paired held-out scores and the pole bends.
+
+    Columns: ``section`` (breaks, coefficients, cv, score, difference, pole), ``key``, ``value``,
+    ``low``, ``high`` (95 %), ``n`` (seeds, or samples), ``detail``.
+    """
+    sp, rows = res["spline"], []
+    add = lambda section, key, value, low=math.nan, high=math.nan, n=math.nan, detail="": rows.append(  # noqa: E731
+        dict(section=section, key=key, value=value, low=low, high=high, n=n, detail=detail))
+    for k, x in enumerate(sp.breaks):
+        add("breaks", f"X_{k}", x)
+    for name, c in (("alpha1", sp.c1), ("alpha2", sp.c2)):
+        for k, v in enumerate(c):
+            add("coefficients", f"{name}_c{k}", float(v), detail="cubic B-spline, clamped knots on the breaks")
+    for p, c, nf in zip(res["cv"]["penalty"], res["cv"]["cv_score"], res["cv"]["failed_folds"]):
+        add("cv", f"penalty_{p:g}", float(c), n=len(res["folds"]),
+            detail="; ".join(x for x in ("chosen" if p == res["penalty"] else "",
+                                         f"{nf} fold(s) whose fit cannot be integrated on the held-out seed "
+                                         f"(score inf)" if nf else "") if x))
+    err, nr = res["errors"], settings.n_resamples
+    for score in SCORES:
+        for law in LAWS:
+            per_seed = err[err["law"] == law].groupby("case")[score].mean().to_numpy()
+            est, lo, hi, n = mean_interval(per_seed, n_resamples=nr)
+            failed = int(err.loc[err["law"] == law, score].isna().sum())
+            add("score", f"{score}: {law}", est, lo, hi, n, "held-out RMS error, mean over seeds"
+                + (f"; {failed} held-out run(s) could not be integrated (left out)" if failed else ""))
+        for law in ("freeform", "model1"):
+            est, lo, hi, n = paired(err, law, "model2", score, nr)
+            add("difference", f"{score}: {law} - model2", est, lo, hi, n,
+                "paired per held-out run, mean per seed; < 0: better than Model 2")
+    X_hi = sp.breaks[-1]
+    e = pole_bend(sp, X_hi)
+    reps = np.array([pole_bend(f, X_hi) for f in res["folds"]])
+    n = len(reps)
+    se = np.sqrt((n - 1) / n * ((reps - reps.mean(axis=0)) ** 2).sum(axis=0)) if n > 1 else np.full(2, np.nan)
+    for i in range(2):
+        add("pole", f"alpha{i + 1} bend at X_hi", float(e[i]), float(e[i] - Z95 * se[i]), float(e[i] + Z95 * se[i]),
+            n, f"alpha(X_hi) - alpha(0) - alpha'(0) X_hi, X_hi = {X_hi:.4g}; jackknife over seeds")
+    return pd.DataFrame(rows)
+
+
+def curves_for_figure(res: dict, X) -> dict:
+    """``{"X", "alpha1", "alpha2", "se1", "se2", "label"}`` for ``figures.fig3``."""
+    a, se = jackknife_band(res["spline"], res["folds"], X)
+    return {"X": np.asarray(X), "alpha1": a[0], "alpha2": a[1], "se1": se[0], "se2": se[1],
+            "label": f"free-form (penalty {res['penalty']:g}, band: 1.96 jackknife s.e.)"}
+
+
+__all__ = ["FreeformSettings", "run", "fit_spline", "breaks_for", "table", "curves_for_figure", "pole_bend",
+           "spline_basis"]

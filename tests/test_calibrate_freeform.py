@@ -1,0 +1,181 @@
+"""Free-form alpha1(X), alpha2(X) (calibrate/freeform.py, model.laws.AlphaSpline, simulate_batch(alpha_spline=...)).
+
+The recovery tests fit model-made DEM-layout cases (``calibrate.synthetic``): Model 2's linear law
+without noise must come back within the tolerances stated below; a Model 1 truth with a strong pole
+(the round-trip tests' truth) at 0.5 x the 500-disk noise must make the cross-validation choose a
+small penalty (the pole cannot be followed by a straight line) and show the bend of alpha1 toward the
+pole. About 22 s of CPU for the module (measured; no test over 11 s): two calibrations to route 2 with the free-form
+fits, and one `python -m calibrate --freeform` on two seeds.
+"""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from calibrate import freeform, pipeline, synthetic
+from model import default_params, params_from_dict, steady_shear, steady_state
+from model.batched import simulate_batch
+from model.laws import AlphaSpline, spline_basis, spline_of_linear
+
+M2 = default_params().model2   # alpha1 = c1 = -0.3, alpha2 = c2 + c3 X = -2 + 25 X
+TRUTH_M1 = dict(a1=-0.85, b1=0.0, c1=-3000.0, a2=-5.0, b2=100.0, c2=2000.0, X_c=0.0827)
+FAST = freeform.FreeformSettings(n_breaks=4, penalties=(1e-4, 1.0), cv_evals=30, max_evals=90, n_resamples=500)
+
+
+def test_spline_law_holds_a_linear_law_exactly_inside_and_outside_its_breaks():
+    sp = spline_of_linear((-0.1, -0.02, 0.05, 0.1), -0.3, 2.0, -2.0, 25.0)
+    X = np.linspace(-0.4, 0.4, 41)
+    a1, a2 = sp(X)
+    np.testing.assert_allclose(a1, -0.3 + 2.0 * X, atol=1e-12)
+    np.testing.assert_allclose(a2, -2.0 + 25.0 * X, atol=1e-12)
+    np.testing.assert_allclose(spline_basis(X, sp.breaks).sum(axis=1), 1.0, atol=1e-12)
+    assert sp(0.3) == pytest.approx((0.3, 5.5))
+
+
+def test_spline_law_rejects_coefficients_that_do_not_match_its_breaks():
+    with pytest.raises(ValueError, match="need 5 coefficients"):
+        AlphaSpline((0.0, 0.1, 0.2), [1.0] * 4, [1.0] * 5)
+
+
+def test_batched_spline_trajectory_equals_model2_with_the_same_linear_law():
+    p = default_params()
+    a, b, _ = steady_state(p, "model2")
+    h = steady_shear(0.4, 1) + steady_shear(0.6, -1)
+    sp = spline_of_linear((-0.12, 0.0, 0.12), M2.c1, 0.0, M2.c2, M2.c3)
+    ref = simulate_batch(p, h, model="model2", A0=(a, b), friction="quadratic").trajectory(0)
+    res = simulate_batch([p, p], h, model=["model2", "model1"], A0=(a, b), friction="quadratic",
+                         alpha_spline=[sp, None])
+    got = res.trajectory(0)
+    for c in ("A_xx", "A_xy", "mu", "theta_A"):
+        np.testing.assert_allclose(got[c], ref[c], atol=1e-9)
+    assert not np.allclose(res.trajectory(1)["A_xy"], ref["A_xy"], atol=1e-3)   # the other one is Model 1's
+
+
+def test_batched_spline_needs_an_explicit_start_and_shared_breaks():
+    p, h = default_params(), steady_shear(0.5)
+    sp = spline_of_linear((-0.1, 0.1), -0.3, 0.0, -2.0, 25.0)
+    with pytest.raises(ValueError, match="explicit A0"):
+        simulate_batch(p, h, model="model2", alpha_spline=sp)
+    other = spline_of_linear((-0.2, 0.1), -0.3, 0.0, -2.0, 25.0)
+    with pytest.raises(ValueError, match="share its breaks"):
+        simulate_batch([p, p], h, model="model2", A0=(0.0, 0.0), alpha_spline=[sp, other])
+
+
+def test_roughness_penalty_is_zero_for_lines_and_the_integral_of_the_squared_curvature():
+    br = (-0.1, -0.03, 0.02, 0.1)
+    R = freeform.roughness_matrix(br)
+    line = spline_of_linear(br, 1.0, 2.0, 3.0, -4.0)
+    assert np.abs(R @ line.c1).max() < 1e-10 and np.abs(R @ line.c2).max() < 1e-10
+    x = np.linspace(br[0], br[-1], 60)
+    c = np.linalg.lstsq(spline_basis(x, br), x**2, rcond=None)[0]   # X^2 exactly: alpha'' = 2
+    assert np.sum((R @ c) ** 2) == pytest.approx(4.0 * (br[-1] - br[0]), rel=1e-9)
+
+
+def _to_route2(root, params, model, noise):
+    fr = "quadratic" if model == "model2" else "eq2"
+    dirs = synthetic.write_ensemble(root, params, seeds=(1, 2, 3), model=model, friction=fr,
+                                    fabric_noise=noise * synthetic.FABRIC_NOISE, mu_noise=noise * synthetic.MU_NOISE)
+    s = pipeline.Settings()
+    cases = pipeline.read_inputs(dirs, s)
+    samples, steady = pipeline.smooth(cases, s)
+    r1, doc1 = pipeline.fit_route1(samples, steady, pipeline.fit_friction(samples, steady, s), s)
+    replays, _, doc2 = pipeline.fit_route2(cases, samples, steady, r1, doc1, s, lambda m: None)
+    return dict(replays=replays, doc2=doc2, steady=steady, sigma_mu=r1["sigma_mu"], s2=s.route2)
+
+
+@pytest.fixture(scope="module")
+def model2_truth(tmp_path_factory):
+    d = _to_route2(tmp_path_factory.mktemp("ff2"), default_params(), "model2", noise=0.0)
+    t = time.process_time()
+    d["res"] = freeform.run(d["replays"], d["doc2"], d["steady"], d["sigma_mu"], d["s2"], FAST, log=lambda m: None)
+    d["cpu"] = time.process_time() - t
+    return d
+
+
+@pytest.fixture(scope="module")
+def model1_truth(tmp_path_factory):
+    doc = default_params().to_dict()
+    doc["model1"] = dict(TRUTH_M1)
+    d = _to_route2(tmp_path_factory.mktemp("ff1"), params_from_dict(doc), "model1", noise=0.5)
+    d["res"] = freeform.run(d["replays"], d["doc2"], d["steady"], d["sigma_mu"], d["s2"], FAST, log=lambda m: None)
+    return d
+
+
+def _central_X(d):
+    lo, hi = np.percentile(freeform.sample_X(d["replays"]), [5, 95])
+    return np.linspace(lo, hi, 50)
+
+
+def test_freeform_fit_recovers_model2_linear_alphas_from_noise_free_model_data(model2_truth):
+    """Tolerance over the central 90 % of the X visited: 0.02 in alpha1 (-0.3), 0.3 in alpha2 (-4 to -0.3)."""
+    x = _central_X(model2_truth)
+    a1, a2 = model2_truth["res"]["spline"](x)
+    assert np.abs(a1 - M2.c1).max() < 0.02
+    assert np.abs(a2 - (M2.c2 + M2.c3 * x)).max() < 0.3
+
+
+def test_freeform_fit_runs_in_seconds_of_cpu(model2_truth):
+    assert model2_truth["cpu"] < 20.0
+
+
+def test_freeform_table_holds_breaks_coefficients_cv_scores_and_pole_bends(model2_truth):
+    tab = model2_truth["res"]["table"]
+    assert set(tab["section"]) == {"breaks", "coefficients", "cv", "score", "difference", "pole"}
+    assert (tab["section"] == "coefficients").sum() == 2 * (FAST.n_breaks + 2)
+    chosen = tab[(tab["section"] == "cv") & tab["detail"].str.contains("chosen")]
+    assert len(chosen) == 1 and chosen["value"].iloc[0] == tab.loc[tab["section"] == "cv", "value"].min()
+    diff = tab[tab["section"] == "difference"]
+    assert np.isfinite(diff[["value", "low", "high"]].to_numpy()).all() and (diff["n"] == 3).all()
+
+
+def test_strong_roughness_penalty_straightens_a_curved_start(model2_truth):
+    d = model2_truth
+    br = d["res"]["spline"].breaks
+    xi = np.linspace(br[0], br[-1], len(br) + 2)
+    bent = AlphaSpline(br, M2.c1 + 30.0 * xi**2, M2.c2 + M2.c3 * xi - 300.0 * xi**2)   # integrable: alpha2 < 0
+    R = freeform.roughness_matrix(br)
+    sp, _ = freeform.fit_spline(d["replays"], d["doc2"], bent, d["steady"], d["sigma_mu"], 1e4, FAST, d["s2"], 60)
+    before = np.linalg.norm(R @ bent.c2)
+    assert np.linalg.norm(R @ sp.c2) < 0.05 * before
+    assert np.linalg.norm(R @ sp.c1) < 0.05 * np.linalg.norm(R @ bent.c1)
+
+
+def test_cross_validation_picks_a_small_penalty_and_a_bend_for_a_strong_pole(model1_truth):
+    """Model 1 truth (c1 = -3000, X_c = 0.0827): a straight alpha cannot follow it, so CV keeps the curvature."""
+    res = model1_truth["res"]
+    cv = res["cv"].set_index("penalty")["cv_score"]
+    assert res["penalty"] == min(FAST.penalties) and cv[min(FAST.penalties)] < cv[max(FAST.penalties)]
+    tab = res["table"].set_index("key")
+    bend = tab.loc["alpha1 bend at X_hi"]
+    assert bend["high"] < 0.0   # alpha1 falls toward the pole, as c1 < 0 makes it
+
+
+def test_claims_table_gets_the_upper_bound_and_pole_rows_from_freeform_csv(model2_truth, tmp_path):
+    from claims import inputs, table
+
+    path = tmp_path / "freeform.csv"
+    model2_truth["res"]["table"].to_csv(path, index=False)
+    rows = table.freeform_rows(inputs.read_freeform(path))
+    assert [r["claim_id"] for r in rows] == ["9", "10"]
+    up = model2_truth["res"]["table"].set_index("key").loc["early_A_norm: freeform - model2"]
+    assert rows[0]["estimate"] == pytest.approx(up["value"]) and rows[0]["low"] == pytest.approx(up["low"])
+    assert all(r["verdict"] in ("reproduced", "contradicted", "inconclusive") for r in rows)
+    assert table.freeform_rows(freeform.note_table("one seed")) == []
+
+
+def test_calibrate_freeform_option_writes_freeform_csv_and_draws_it_on_fig3(tmp_path):
+    from calibrate.__main__ import main
+
+    dirs = synthetic.write_ensemble(tmp_path / "dem", default_params(), seeds=(1, 2), model="model2",
+                                    friction="quadratic")
+    out = tmp_path / "cal"
+    argv = ["--dem", *map(str, dirs), "--out", str(out), "--bootstrap", "2",
+            "--bootstrap-evals", "10", "--route2-evals", "40", "--freeform", "--freeform-breaks", "3"]
+    assert main(argv) == 0
+    tab = pd.read_csv(out / "freeform.csv")
+    assert list(tab.columns) == ["section", "key", "value", "low", "high", "n", "detail"]
+    assert (tab["section"] == "difference").sum() == 8 and (tab.loc[tab["section"] == "difference", "n"] == 2).all()
+    assert (out / "fig3a_alpha1_vs_X.png").stat().st_size > 0
