@@ -9,7 +9,8 @@ import shutil
 import numpy as np
 import pytest
 
-from tests.test_dem_stages import (RUN, assert_resumed_without_gap_or_duplicate, kill_preshear_after_first_checkpoint,
+from tests.test_dem_stages import (RUN, assert_pack_restored_the_grains_own_friction_and_damping,
+                                   assert_resumed_without_gap_or_duplicate, kill_preshear_after_first_checkpoint,
                                    read, run_all_stages, yade)
 from tests.test_dem_stages import make_scene as make_stage_scene
 
@@ -32,6 +33,10 @@ def test_periodic_stages_write_the_contract(case):
         assert side["samples"] == len(read(case["dir"] / f"{stage}.csv"))
         assert any(e.startswith("PeriTriaxController") for e in side["engines"])
         assert any("FrictVisco" in e for e in side["engines"])
+
+
+def test_periodic_pack_restores_the_grains_friction_and_damping(case, tmp_path):
+    assert_pack_restored_the_grains_own_friction_and_damping(case, tmp_path)
 
 
 def test_periodic_cell_holds_sigma_yy_within_2_percent_over_preshear(case):

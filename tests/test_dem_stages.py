@@ -28,7 +28,8 @@ COLUMNS = ["t", "strain", "gammadot", "U_top", "U_bottom", "gap", "A_xx", "A_xy"
 def make_scene(example="tiny.json"):
     """A tiny example scene of yade_scripts/examples/ with short stages (a few seconds each)."""
     sc = json.loads((YS / "examples" / example).read_text())
-    sc["pack"].update(initial_solid_fraction=0.45, ke_max=1e-6, ramp_time=10)
+    # the pack's defaults, but a lower compaction friction, so that its restore is tested
+    sc["pack"].update(initial_solid_fraction=0.55, ke_max=1e-6, friction=0.2)
     sc["preshear"]["strain"] = 1.2
     sc["heaviside"]["strain"] = 0.4
     sc["sinusoidal"].update(strain=0.3, transition_strain=0.1)
@@ -167,6 +168,58 @@ def test_sinusoidal_wall_speed_follows_half_cosine(case):
     expect = np.where(tau < T, U * np.cos(np.pi * np.clip(tau / T, 0, 1)), -U)
     assert np.allclose(r["U_top"], expect, atol=U * 0.02)
     assert np.allclose(r["U_bottom"], -r["U_top"])
+
+
+INSPECT_PACKING = """
+import json, sys
+from yade.wrapper import NewtonIntegrator, Omega
+O = Omega()
+O.load(sys.argv[1])
+lay = json.loads(O.tags["ys_layout"])
+print("PACKING " + json.dumps(dict(
+    materials=[float(m.frictionAngle) for m in O.materials],
+    contacts=[float(i.phys.tangensOfFrictionAngle) for i in O.interactions if i.isReal],
+    damping=[float(e.damping) for e in O.engines if isinstance(e, NewtonIntegrator)],
+    wall_damped=[bool(O.bodies[lay["clump"]].state.isDamped)] if "clump" in lay else [])), flush=True)
+"""
+
+
+def saved_packing(tmp_path, state):
+    """Friction angles of the materials, friction coefficients of the contacts, the NewtonIntegrator's
+    damping and the top wall's State.isDamped in a saved state (read by YADE itself)."""
+    script = tmp_path / "inspect_packing.py"
+    script.write_text(INSPECT_PACKING)
+    r = yade(script, state)
+    assert r.returncode == 0, r.stderr[-2000:]
+    return json.loads(r.stdout.split("PACKING ", 1)[1].splitlines()[0])
+
+
+def assert_pack_restored_the_grains_own_friction_and_damping(case, tmp_path):
+    """The pack compacts with pack.friction and damps with pack.damping; the saved packing
+    has material.friction on every material and contact and effects.damping in the integrator."""
+    sc = json.loads(case["scene"].read_text())
+    mu, damping = sc["material"]["friction"], sc["effects"]["damping"]
+    assert sc["pack"]["friction"] < mu and sc["pack"].get("damping", 0.5) != damping  # else nothing is tested
+    got = saved_packing(tmp_path, case["dir"] / "pack.final.yade.gz")
+    assert len(got["contacts"]) > 100
+    assert np.allclose(np.tan(got["materials"]), mu, rtol=1e-12, atol=0)
+    assert np.allclose(got["contacts"], mu, rtol=1e-12, atol=0)
+    assert got["damping"] == [damping]
+    assert all(got["wall_damped"])
+
+
+def test_pack_restores_the_grains_friction_and_damping(case, tmp_path):
+    assert_pack_restored_the_grains_own_friction_and_damping(case, tmp_path)
+
+
+def test_pack_converges_through_its_phases(case):
+    side = json.loads((case["dir"] / "pack.json").read_text())
+    ps = side["phase_steps"]
+    assert set(ps) == {"compress", "ramp", "settle"} and all(v > 0 for v in ps.values())
+    assert sum(ps.values()) == side["steps"]
+    assert side["converged_at_t"] is not None and abs(side["p_wall_end"] - 1) < 0.02
+    r = read(case["dir"] / "pack.csv")
+    assert r["ke"][-1] < side["scene"]["pack"]["ke_max"]
 
 
 def test_same_seed_same_packing(tmp_path):

@@ -189,6 +189,48 @@ def layout():
     return json.loads(O.tags["ys_layout"])
 
 
+def quench_grains(lay):
+    """Set every grain's velocity and angular velocity to zero (and the top wall's vertical speed).
+
+    Used once, at the start of the pack's settling: the rattlers (grains without contacts)
+    keep their speed in free flight, where Cundall damping does not act, and cross their
+    cages in tens of time units; a packing out of equilibrium picks its speed up again
+    within the settling's first check interval, so the settling criterion still tests it.
+    """
+    zero = Vector3(0, 0, 0)
+    for i in range(lay["N"]):
+        s = O.bodies[i].state
+        s.vel = zero
+        s.angVel = zero
+    if lay.get("kind") != "periodic":
+        cl = O.bodies[lay["clump"]].state
+        cl.vel = Vector3(cl.vel[0], 0, 0)
+
+
+def set_wall_damped(lay, damped):
+    """Whether the NewtonIntegrator's Cundall damping acts on the top wall (State.isDamped of the clump;
+    a periodic cell has no wall body: nothing to do)."""
+    if lay.get("kind") != "periodic":
+        O.bodies[lay["clump"]].state.isDamped = bool(damped)
+
+
+def set_friction(mu):
+    """Coulomb friction coefficient ``mu`` on every material and every existing interaction.
+
+    Materials get frictionAngle = atan(mu) (the Ip2 functors give new contacts
+    tan(min(angle_1, angle_2)) = mu); existing contacts get
+    phys.tangensOfFrictionAngle = mu, the coefficient of the Coulomb limit
+    |f_t| <= mu f_n in Law2_ScGeom_ViscElPhys_Basic and Law2_ScGeom_FrictViscoPhys_CundallStrackVisco.
+    Lowering mu on a static packing is not neutral; raising it is (the Coulomb cone only widens).
+    """
+    angle = math.atan(mu)
+    for m in O.materials:
+        m.frictionAngle = angle
+    for i in O.interactions:
+        if i.isReal:
+            i.phys.tangensOfFrictionAngle = mu
+
+
 def set_wall_load(lay, force):
     """Permanent force on the top clump (not saved with the state: set after every load)."""
     if lay.get("kind") == "periodic":

@@ -22,9 +22,11 @@ O = Omega()
 FLIP_EVERY = 100  # steps between checks of the periodic cell's skew
 
 
-def build(scene, sample_every, sample_command, wall_command=None, wall_steps=0):
+def build(scene, sample_every, sample_command, wall_command=None, wall_steps=0, damping=None):
     """Return the engine list.
 
+    damping: Cundall's local damping of the NewtonIntegrator, if not effects.damping
+    (the pack stage's pack.damping, see `set_damping`).
     sample_every: steps between samples (PyRunner, the stage's controller).
     wall_command: if given, a per-step PyRunner (sinusoidal transition) run
     `wall_steps` times.
@@ -45,7 +47,7 @@ def build(scene, sample_every, sample_command, wall_command=None, wall_steps=0):
     if fx["gravity"]:
         gx, gy = fx["gravity"]
         engines.append(GravityEngine(gravity=Vector3(gx, gy, 0), label="gravity"))
-    engines.append(NewtonIntegrator(damping=fx["damping"], gravity=Vector3(0, 0, 0), label="newton"))
+    engines.append(NewtonIntegrator(damping=fx["damping"] if damping is None else damping, gravity=Vector3(0, 0, 0), label="newton"))
     if wall_command is not None and wall_steps > 0:
         # before the sampler, so that a sample sees the speed of its own step
         engines.append(PyRunner(command=wall_command, iterPeriod=1, nDo=wall_steps, label="wallspeed"))
@@ -54,6 +56,15 @@ def build(scene, sample_every, sample_command, wall_command=None, wall_steps=0):
         engines.append(PyRunner(command="_ys_flip()", iterPeriod=FLIP_EVERY, label="flip"))
     engines.append(PyRunner(command=sample_command, iterPeriod=max(1, int(sample_every)), label="sampler"))
     return engines
+
+
+def set_damping(damping):
+    """Cundall's local damping of the NewtonIntegrator in O.engines: each grain's force component f_i
+    becomes f_i (1 - damping sign(f_i v_i)) (the same for torques)."""
+    newton = [e for e in O.engines if isinstance(e, NewtonIntegrator)]
+    if len(newton) != 1:
+        raise RuntimeError(f"expected one NewtonIntegrator in O.engines, found {len(newton)}")
+    newton[0].damping = damping
 
 
 def cell_controller(scene):

@@ -46,15 +46,18 @@ SPEC = {
         "dt_over_tc": (_num(0, 0.3, lo_open=True), REQUIRED),
     },
     "pack": {
-        "initial_solid_fraction": (_num(0.05, 0.7), 0.4),
+        "initial_solid_fraction": (_num(0.05, 0.7), 0.55),
         "solid_fraction_guess": (_num(0.5, 0.9), 0.8),
         "ke_max": (_num(0, 1, lo_open=True), 1e-7),
         "wall_speed_max": (_num(0, 1, lo_open=True), 1e-3),
         "pressure_tolerance": (_num(0, 1, lo_open=True), 0.02),
-        "compaction_pressure": (_num(0, 1, lo_open=True), 0.05),
-        "ramp_time": (_num(0, 1e5), 20.0),
+        "compaction_pressure": (_num(0, 1, lo_open=True), 0.5),
+        "ramp_time": (_num(0, 1e5), 3.0),
         "check_interval": (_num(0, 1e3, lo_open=True), 0.5),
         "max_time": (_num(0, 1e6, lo_open=True), 2000.0),
+        "friction": (dict(_num(0, 2), null=True), None),  # None: material.friction
+        "damping": (_num(0, 1, hi_open=True), 0.5),
+        "quench": (dict(kind="bool"), True),
     },
     "preshear": {
         "strain": (_num(0, 100, lo_open=True), REQUIRED),
@@ -108,6 +111,8 @@ def _fmt_range(s):
 
 def _check_value(name, spec, v):
     kind = spec["kind"]
+    if v is None and spec.get("null"):
+        return None
     if kind == "choice":
         if v not in spec["choices"]:
             raise SceneError(f"scene error: {name} = {v!r} must be one of {', '.join(spec['choices'])}")
