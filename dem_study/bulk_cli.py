@@ -14,8 +14,8 @@ import yaml
 
 import pandas as pd
 
-from . import bulk_cells, bulk_cost, grid
-from .analysis import StudyInputError
+from . import bulk, bulk_cells, bulk_cost, bulk_figures, grid
+from .analysis import StudyInputError, strain_edges
 from .cli import _read_yaml
 
 
@@ -52,6 +52,29 @@ def cost(args) -> int:
     return 0
 
 
+def analyse(args) -> int:
+    try:
+        cases = pd.read_csv(args.cases)
+    except (OSError, pd.errors.ParserError, pd.errors.EmptyDataError) as exc:
+        raise StudyInputError(f"{args.cases}: not a readable cases table ({str(exc).strip()})") from None
+    need = {"case", "cell", "seed", "kind", "H_over_d", "W_over_d"} - set(cases.columns)
+    if need:
+        raise StudyInputError(f"{args.cases}: missing columns {', '.join(sorted(need))} (the table of bulk_study_cases)")
+    edges = strain_edges(args.heaviside_strain, args.transient_bin)
+    table, cells, curves = bulk.analyse(cases, args.bulk_dir, args.steady_window, edges, args.early_strain,
+                                        args.references, args.tall_reference, args.match_se)
+    table.to_csv(args.out_table, index=False, float_format="%.6g")
+    cells = cells.merge(table.drop_duplicates("cell")[["cell", *[c for c in table if c.startswith(
+        ("info_ratio_", "core_hours_to_tall_se_"))]]], on="cell")
+    bulk_figures.bulk_vs_walls(cells, curves, args.references, args.tall_reference, args.out_figure, args.match_se)
+    with pd.option_context("display.width", 200, "display.max_columns", 30):
+        print(table[["cell", "reference", "N", "core_hours_per_seed", "mu", "A_norm", "theta_A_deg", "match",
+                     "failing"]].to_string())
+        print(cells[["cell", "N", "early_se_A_norm", "early_se_theta_A_deg",
+                     *[c for c in cells if c.startswith(("info_ratio_", "core_hours_to_tall_se_"))]]].to_string())
+    return 0
+
+
 def _merge(base, extra):
     if isinstance(base, dict) and isinstance(extra, dict):
         return {**base, **{k: _merge(base.get(k), v) if k in base else v for k, v in extra.items()}}
@@ -71,6 +94,19 @@ def main(argv=None) -> int:
     c.add_argument("--bulk-dir", required=True, help="folder holding one folder per case")
     c.add_argument("--out", required=True, help="output CSV")
     c.set_defaults(func=cost)
+    a = sub.add_parser("analyse", help="bulk_vs_walls.csv and its figure from the finished cases")
+    a.add_argument("--cases", required=True, help="the study's cases table (bulk_study_cases), CSV")
+    a.add_argument("--bulk-dir", required=True, help="folder holding one folder per case")
+    a.add_argument("--out-table", required=True, help="output CSV (bulk_vs_walls.csv)")
+    a.add_argument("--out-figure", required=True, help="output figure (bulk_vs_walls.png)")
+    a.add_argument("--references", nargs="+", required=True, help="the reference cells (W = 4H wall cells)")
+    a.add_argument("--tall-reference", help="the paper's cell: denominator of the information ratio")
+    a.add_argument("--steady-window", type=float, default=1.0, help="pre-shear strain averaged for steady values")
+    a.add_argument("--heaviside-strain", type=float, required=True, help="strain after the reversal")
+    a.add_argument("--transient-bin", type=float, default=0.01, help="strain bin of the transient curves")
+    a.add_argument("--early-strain", type=float, default=0.1, help="strain after the reversal of the information")
+    a.add_argument("--match-se", type=float, default=2.0, help="combined standard errors of a match")
+    a.set_defaults(func=analyse)
     args = p.parse_args(argv)
     try:
         return args.func(args)

@@ -52,10 +52,19 @@ def test_two_cells_one_seed_plan_one_dem_case_per_cell(tmp_path):
     assert not any(rule.startswith("dem_") for rule in c), c   # the campaign is not run
 
 
-def test_the_default_target_plans_the_study_when_it_is_on(tmp_path):
+def test_the_default_target_plans_the_study_and_its_analysis_when_it_is_on(tmp_path):
     result = dry_run(two_cells(tmp_path), tmp_path)
     assert result.returncode == 0, result.stderr[-3000:]
-    assert counts(result.stdout).get("bulk_study_heaviside") == 2
+    c = counts(result.stdout)
+    assert c.get("bulk_study_heaviside") == 2 and c.get("bulk_vs_walls") == 1 and c.get("bulk_study_dem") == 1
+
+
+def test_the_analysis_target_plans_the_dem_cases_and_no_campaign(tmp_path):
+    result = dry_run(two_cells(tmp_path), tmp_path, "bulk_vs_walls")
+    assert result.returncode == 0, result.stderr[-3000:]
+    c = counts(result.stdout)
+    assert c.get("bulk_vs_walls") == 1 and c.get("bulk_study_pack") == 2
+    assert not any(rule.startswith("dem_") or rule.startswith("calibrat") for rule in c), c
 
 
 def test_study_off_plans_none_of_it(tmp_path):

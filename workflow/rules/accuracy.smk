@@ -270,7 +270,9 @@ def accuracy_targets():
 # by the campaign's own YADE rules (dem.smk, reused below), the campaign's scene
 # with the cell, kappa, I and the study's strains changed.
 # `python -m dem_study.bulk_cli estimate --configfile ...` prints the cost per
-# cell; `snakemake -j2 ... bulk_study_dem` runs only the study's DEM cases.
+# cell; `snakemake -j2 bulk_study_dem ...` runs only the study's DEM cases,
+# `snakemake -j2 bulk_vs_walls ...` them and the analysis (results/accuracy/
+# bulk_vs_walls.csv, .png; dem_study/README.md "Bulk against walls").
 from campaign import preflight as _preflight
 from dem_study import bulk_cells
 
@@ -397,5 +399,48 @@ rule bulk_study_dem:
         "{PY} -m dem_study.bulk_cli cost --cases {input.cases} --bulk-dir {ACC_BULK} --out {output} > {log} 2>&1"
 
 
+BULK = bulk_cells.settings(config)
+
+
+rule bulk_vs_walls:
+    input:
+        cases=rules.bulk_study_cases.output[0],
+        cost=rules.bulk_study_dem.output[0],
+        runs=BULK_RUNS,
+    output:
+        table=report(
+            f"{RESULTS}/accuracy/bulk_vs_walls.csv",
+            caption="../report/bulk_vs_walls.rst",
+            category="Accuracy and cost",
+        ),
+        figure=report(
+            f"{RESULTS}/accuracy/bulk_vs_walls.png",
+            caption="../report/bulk_vs_walls.rst",
+            category="Accuracy and cost",
+        ),
+    params:
+        references=" ".join(BULK.get("references", [])),
+        tall=f"--tall-reference {BULK['tall_reference']}" if BULK.get("tall_reference") else "",
+        steady_window=BULK["steady_window"],
+        heaviside_strain=BULK["heaviside_strain"],
+        transient_bin=BULK["transient_bin"],
+        early_strain=BULK["early_strain"],
+        match_se=BULK["match_se"],
+    resources:
+        runtime=COST_DEM_STUDY_ANALYSIS.runtime,
+        mem_mb=COST_DEM_STUDY_ANALYSIS.mem_mb,
+    log:
+        f"{RESULTS}/logs/accuracy/bulk_vs_walls.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/accuracy/bulk_vs_walls.tsv"
+    threads: 1
+    shell:
+        "{PY} -m dem_study.bulk_cli analyse --cases {input.cases} --bulk-dir {ACC_BULK}"
+        " --out-table {output.table} --out-figure {output.figure} --references {params.references}"
+        " {params.tall} --steady-window {params.steady_window} --heaviside-strain {params.heaviside_strain}"
+        " --transient-bin {params.transient_bin} --early-strain {params.early_strain}"
+        " --match-se {params.match_se} > {log} 2>&1"
+
+
 def bulk_study_targets():
-    return rules.bulk_study_dem.output
+    return [*rules.bulk_study_dem.output, *rules.bulk_vs_walls.output]
