@@ -1,9 +1,12 @@
 """The bulk-vs-walls study in the workflow: one DEM case per (cell, seed) through the campaign's
 rules, nothing of it with the study off, and a bad cell stopped before any job, naming the key."""
+import shutil
 import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
+import pandas as pd
 import pytest
 import yaml
 
@@ -67,6 +70,19 @@ def test_the_analysis_target_plans_the_dem_cases_and_no_campaign(tmp_path):
     assert not any(rule.startswith("dem_") or rule.startswith("calibrat") for rule in c), c
 
 
+def test_the_shipped_overlay_plans_every_cell_and_seed_and_nothing_of_the_campaign():
+    """config/bulk_validation.yaml over config/quick.yaml, as its header says to run it."""
+    overlay = yaml.safe_load((ROOT / "config" / "bulk_validation.yaml").read_text())["accuracy"]["bulk_vs_walls"]
+    n = len(overlay["cells"]) * len(overlay["seeds"])
+    result = subprocess.run([sys.executable, "-m", "snakemake", "-n", "bulk_vs_walls", "--quiet", "rules",
+                             "--forceall", "--configfile", "config/quick.yaml", "config/bulk_validation.yaml"],
+                            cwd=ROOT, capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stderr[-3000:]
+    c = counts(result.stdout)
+    assert c.get("bulk_study_heaviside") == n and c.get("bulk_study_pack") == n and c.get("bulk_vs_walls") == 1
+    assert not any(rule.startswith("dem_") for rule in c), c
+
+
 def test_study_off_plans_none_of_it(tmp_path):
     config = two_cells(tmp_path)
     config["accuracy"]["bulk_vs_walls"]["run"] = False
@@ -116,3 +132,34 @@ def test_estimate_grows_with_disks_and_lists_every_case(tmp_path):
     assert list(est["case"]) == ["W4H-H12_s1", "periodic-N500_s1"]
     assert (est["est_core_s"] > 0).all()
     assert est["est_core_s"].iloc[0] == pytest.approx(est["est_core_s"].iloc[1], rel=0.01)  # 496 and 497 disks
+
+
+@pytest.mark.yade
+@pytest.mark.slow
+@pytest.mark.skipif(shutil.which("yade") is None, reason="needs YADE (Debian package yade)")
+def test_tiny_study_runs_end_to_end_through_snakemake(tmp_path):
+    """Two real ~100-disk cells (walls and periodic) x two seeds, to the table and the figure."""
+    config = yaml.safe_load((ROOT / "config" / "ci.yaml").read_text())
+    config["results_dir"] = str(tmp_path / "results")
+    config["accuracy"] = dict(ode_work_precision=False, bulk_vs_walls=dict(
+        run=True,
+        cells={"walls-H8": dict(kind="walls", H_over_d=8, W_over_H=2),
+               "periodic-H10": dict(kind="periodic", H_over_d=10, W_over_H=1)},
+        references=["walls-H8"], tall_reference="walls-H8", seeds=[1, 2],
+        kappa=1.0e3, inertial_number=1.0e-2, pack={"ke_max": 1.0e-4},
+        preshear_strain=0.6, heaviside_strain=0.2, steady_window=0.3, early_strain=0.1))
+    path = tmp_path / "config.yaml"
+    path.write_text(yaml.safe_dump(config))
+    result = subprocess.run([sys.executable, "-m", "snakemake", "-j1", "bulk_vs_walls", "--configfile", str(path)],
+                            cwd=ROOT, capture_output=True, text=True, timeout=900)
+    assert result.returncode == 0, result.stderr[-3000:]
+    out = Path(config["results_dir"]) / "accuracy"
+    table = pd.read_csv(out / "bulk_vs_walls.csv")
+    row = table[table["cell"] == "periodic-H10"].iloc[0]
+    assert row["reference"] == "walls-H8" and row["N"] == bulk_cells.n_disks("periodic", 10, 1)
+    assert 0.1 < row["mu"] < 0.6 and 0 < row["A_norm"] < 0.5 and 90 < row["theta_A_deg"] < 180
+    assert 0.7 < row["phi"] < 0.9 and 2.5 < row["Z"] < 5 and row["mu_se"] > 0
+    assert row["core_hours_per_seed"] > 0 and np.isfinite(row["info_ratio_A_norm"])
+    assert (out / "bulk_vs_walls.png").stat().st_size > 10_000
+    cost = pd.read_csv(out / "bulk_cost.csv")
+    assert len(cost) == 4 and (cost["cpu_time_s"] > 0).all()
