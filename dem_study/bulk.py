@@ -187,3 +187,31 @@ def analyse(cases: pd.DataFrame, bulk_dir, steady_window: float, edges: np.ndarr
     results = {c: load_case(Path(bulk_dir) / c, c, steady_window, edges) for c in cases["case"]}
     cells, curves = cell_table(cases, results, early_strain)
     return comparison(cells, curves, references, tall, match_se), cells, curves
+
+
+def verdict(table: pd.DataFrame, references, tall: str | None, match_se: float = 2.0,
+            target_ratio: float = 10.0) -> dict:
+    """Which cells match every reference, and the best of them by information per core-hour.
+
+    ``best``: among the cells that are not references and match every reference, the one
+    whose smaller ``info_ratio`` (|A| or theta_A) is largest; ``best_reaches_target``: that
+    ratio is at least ``target_ratio`` (the issue's tenth of the tall cell's cost).
+    """
+    cells = {}
+    for cell, rows in table.groupby("cell", sort=False):
+        first = rows.iloc[0]
+        compared = rows[rows["reference"].fillna("") != ""]
+        cells[cell] = {
+            "kind": first["kind"], "N": int(first["N"]), "core_hours_per_seed": float(first["core_hours_per_seed"]),
+            "matches": {r["reference"]: bool(r["match"]) for _, r in compared.iterrows()},
+            "failing": {r["reference"]: r["failing"] for _, r in compared.iterrows() if not r["match"]},
+            **{f"info_ratio_{q}": float(first.get(f"info_ratio_{q}", np.nan)) for q in INFORMATION},
+        }
+    matching = [c for c, v in cells.items() if c not in references and v["matches"] and all(v["matches"].values())]
+    worst = {c: min(cells[c][f"info_ratio_{q}"] for q in INFORMATION) for c in matching}
+    best = max(worst, key=worst.get) if worst and tall else None
+    return {"match_se": match_se, "references": list(references), "tall_reference": tall,
+            "matching_every_reference": matching, "best": best,
+            "best_info_ratio": worst.get(best) if best else None,
+            "best_reaches_target": bool(best is not None and worst[best] >= target_ratio),
+            "target_ratio": target_ratio, "cells": cells}

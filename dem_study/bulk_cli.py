@@ -8,6 +8,7 @@ figure from finished runs (dem_study/README.md, "Bulk against walls").
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 
 import yaml
@@ -64,6 +65,11 @@ def analyse(args) -> int:
     table, cells, curves = bulk.analyse(cases, args.bulk_dir, args.steady_window, edges, args.early_strain,
                                         args.references, args.tall_reference, args.match_se)
     table.to_csv(args.out_table, index=False, float_format="%.6g")
+    summary = bulk.verdict(table, args.references, args.tall_reference, args.match_se)
+    if args.out_summary:
+        with open(args.out_summary, "w") as fh:
+            json.dump(summary, fh, indent=2)
+            fh.write("\n")
     cells = cells.merge(table.drop_duplicates("cell")[["cell", *[c for c in table if c.startswith(
         ("info_ratio_", "core_hours_to_tall_se_"))]]], on="cell")
     bulk_figures.bulk_vs_walls(cells, curves, args.references, args.tall_reference, args.out_figure, args.match_se)
@@ -72,6 +78,8 @@ def analyse(args) -> int:
                      "failing"]].to_string())
         print(cells[["cell", "N", "early_se_A_norm", "early_se_theta_A_deg",
                      *[c for c in cells if c.startswith(("info_ratio_", "core_hours_to_tall_se_"))]]].to_string())
+    print(f"matching every reference within {args.match_se:g} SE: {', '.join(summary['matching_every_reference']) or 'none'}; "
+          f"best: {summary['best']} (information per core-hour {summary['best_info_ratio']} x the tall cell's)")
     return 0
 
 
@@ -99,6 +107,7 @@ def main(argv=None) -> int:
     a.add_argument("--bulk-dir", required=True, help="folder holding one folder per case")
     a.add_argument("--out-table", required=True, help="output CSV (bulk_vs_walls.csv)")
     a.add_argument("--out-figure", required=True, help="output figure (bulk_vs_walls.png)")
+    a.add_argument("--out-summary", help="output JSON: the cells matching every reference and the best of them")
     a.add_argument("--references", nargs="+", required=True, help="the reference cells (W = 4H wall cells)")
     a.add_argument("--tall-reference", help="the paper's cell: denominator of the information ratio")
     a.add_argument("--steady-window", type=float, default=1.0, help="pre-shear strain averaged for steady values")

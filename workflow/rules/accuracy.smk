@@ -418,6 +418,7 @@ rule bulk_vs_walls:
             caption="../report/bulk_vs_walls.rst",
             category="Accuracy and cost",
         ),
+        summary=f"{RESULTS}/accuracy/bulk_vs_walls.json",
     params:
         references=" ".join(BULK.get("references", [])),
         tall=f"--tall-reference {BULK['tall_reference']}" if BULK.get("tall_reference") else "",
@@ -436,7 +437,8 @@ rule bulk_vs_walls:
     threads: 1
     shell:
         "{PY} -m dem_study.bulk_cli analyse --cases {input.cases} --bulk-dir {ACC_BULK}"
-        " --out-table {output.table} --out-figure {output.figure} --references {params.references}"
+        " --out-table {output.table} --out-figure {output.figure} --out-summary {output.summary}"
+        " --references {params.references}"
         " {params.tall} --steady-window {params.steady_window} --heaviside-strain {params.heaviside_strain}"
         " --transient-bin {params.transient_bin} --early-strain {params.early_strain}"
         " --match-se {params.match_se} > {log} 2>&1"
