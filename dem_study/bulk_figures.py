@@ -9,10 +9,19 @@ import matplotlib.pyplot as plt  # noqa: E402
 import matplotlib.ticker  # noqa: E402
 import numpy as np  # noqa: E402
 
-from .bulk import INFORMATION, STEADY, TRANSIENT  # noqa: E402
+from .bulk import AXIAL, INFORMATION, STEADY, TRANSIENT  # noqa: E402
 
 LABELS = {"mu": r"$\mu$", "A_norm": r"$|A|$", "theta_A_deg": r"$\theta_A$ (deg)", "phi": r"$\phi$", "Z": "Z"}
 MARKERS = {"walls": "s", "periodic": "o"}
+
+
+def _break_at_wraps(x, y, *more):
+    """Axial angles in [0, 180) with a gap (NaN) where they wrap through 0/180 (a step over 90 deg)."""
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    cut = np.flatnonzero(np.abs(np.diff(y)) > 90) + 1
+    out = [np.insert(x, cut, np.nan), np.insert(y, cut, np.nan)]
+    out += [np.insert(np.asarray(v, float), cut, np.nan) for v in more]
+    return out
 
 
 def bulk_vs_walls(cells, curves, references, tall, path, match_se: float = 2.0):
@@ -36,11 +45,12 @@ def bulk_vs_walls(cells, curves, references, tall, path, match_se: float = 2.0):
     axes[0][0].legend(fontsize=7)
     for ax, q in zip(axes[1], TRANSIENT):
         for cell, c in curves.items():
-            ax.plot(c["strain_since_reversal"], c[q], color=colours[cell], lw=2.2 if cell in references else 1.0,
-                    label=cell)
+            x, y, se = c["strain_since_reversal"].to_numpy(), c[q].to_numpy(), c[f"{q}_se"].to_numpy()
+            if q in AXIAL:
+                x, y, se = _break_at_wraps(x, y, se)
+            ax.plot(x, y, color=colours[cell], lw=2.2 if cell in references else 1.0, label=cell)
             if cell in references:
-                ax.fill_between(c["strain_since_reversal"], c[q] - c[f"{q}_se"], c[q] + c[f"{q}_se"],
-                                color=colours[cell], alpha=0.2, lw=0)
+                ax.fill_between(x, y - se, y + se, color=colours[cell], alpha=0.2, lw=0)
         ax.set_xlabel("strain since the reversal")
         ax.set_ylabel(LABELS[q])
     ax = axes[1][len(TRANSIENT)]
