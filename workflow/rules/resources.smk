@@ -28,9 +28,11 @@ DEM_MEM_SAFETY = 2.0
 
 
 def _scene_of(wc):
-    """The scene dict of a DEM job: a campaign case or a DEM-study point."""
+    """The scene dict of a DEM job: a campaign case, a DEM-study point or a bulk-study case."""
     if "case" in wc.keys():
         return case_scene(wc.case)
+    if "bulkcase" in wc.keys():
+        return bulk_scene(wc.bulkcase)
     return point_scene(wc.point)
 
 
