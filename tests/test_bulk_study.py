@@ -89,6 +89,7 @@ def test_steady_values_are_seed_means_with_their_standard_error(study):
     assert ref["N"] == 5000 and ref["seeds"] == 3
     assert ref["core_hours_per_seed"] == pytest.approx(1800 / 3600)
     assert ref["core_hours"] == pytest.approx(3 * 1800 / 3600)
+    assert ref["core_hours_heaviside_per_seed"] == pytest.approx(300 / 3600)
 
 
 def test_a_cell_like_the_reference_matches_and_an_offset_one_is_named(study):
