@@ -49,7 +49,7 @@ import pandas as pd
 from dem_contract import DEMInputError, angle_difference, read_series, read_sidecar, steady_values
 
 from .analysis import StudyInputError, _mean_and_se, transient_curves
-from .bulk_cost import case_cost
+from .bulk_cost import STAGES, case_cost
 
 STEADY = ("mu", "A_norm", "theta_A_deg", "phi", "Z")
 TRANSIENT = ("mu", "A_norm", "theta_A_deg")
@@ -110,6 +110,8 @@ def cell_table(cases: pd.DataFrame, results: dict[str, CaseResult], early_strain
         hours = np.array([r.cost["core_hours"] for r in res])
         row["core_hours_per_seed"] = float(hours.mean())
         row["core_hours"] = float(hours.sum())
+        for stage in STAGES:   # the pack and pre-shear are what a reversal train would share
+            row[f"core_hours_{stage}_per_seed"] = float(np.mean([r.cost[f"cpu_time_{stage}_s"] for r in res]) / 3600)
         for q in STEADY:
             row[q], row[f"{q}_se"] = _mean_and_se(np.array([r.steady[q] for r in res]), q in AXIAL)
         curves[cell] = c = mean_curves(res)

@@ -60,7 +60,8 @@ def analyse(args) -> int:
         raise StudyInputError(f"{args.cases}: not a readable cases table ({str(exc).strip()})") from None
     need = {"case", "cell", "seed", "kind", "H_over_d", "W_over_d"} - set(cases.columns)
     if need:
-        raise StudyInputError(f"{args.cases}: missing columns {', '.join(sorted(need))} (the table of bulk_study_cases)")
+        raise StudyInputError(f"{args.cases}: missing columns {', '.join(sorted(need))} "
+                              "(the table of bulk_study_cases)")
     edges = strain_edges(args.heaviside_strain, args.transient_bin)
     table, cells, curves = bulk.analyse(cases, args.bulk_dir, args.steady_window, edges, args.early_strain,
                                         args.references, args.tall_reference, args.match_se)
@@ -78,8 +79,9 @@ def analyse(args) -> int:
                      "failing"]].to_string())
         print(cells[["cell", "N", "early_se_A_norm", "early_se_theta_A_deg",
                      *[c for c in cells if c.startswith(("info_ratio_", "core_hours_to_tall_se_"))]]].to_string())
-    print(f"matching every reference within {args.match_se:g} SE: {', '.join(summary['matching_every_reference']) or 'none'}; "
-          f"best: {summary['best']} (information per core-hour {summary['best_info_ratio']} x the tall cell's)")
+    matching = ", ".join(summary["matching_every_reference"]) or "none"
+    print(f"matching every reference within {args.match_se:g} SE: {matching}; best: {summary['best']} "
+          f"(information per core-hour {summary['best_info_ratio']} x the tall cell's)")
     return 0
 
 

@@ -163,3 +163,28 @@ def test_tiny_study_runs_end_to_end_through_snakemake(tmp_path):
     assert (out / "bulk_vs_walls.png").stat().st_size > 10_000
     cost = pd.read_csv(out / "bulk_cost.csv")
     assert len(cost) == 4 and (cost["cpu_time_s"] > 0).all()
+
+
+def test_a_narrow_cell_below_the_scene_range_is_named_by_the_preflight(tmp_path):
+    from campaign import preflight
+    config = two_cells(tmp_path)
+    config["accuracy"]["bulk_vs_walls"]["cells"]["narrow-H37-W16"] = dict(kind="walls", H_over_d=37, W_over_H=16 / 37)
+    lines = preflight.check(config)
+    assert any("accuracy.bulk_vs_walls.cells.narrow-H37-W16.W_over_H" in line and "minimum of 0.5" in line
+               for line in lines), lines
+
+
+def test_estimate_prints_the_cost_per_cell_of_the_shipped_overlay(capsys):
+    from dem_study.bulk_cli import main
+    assert main(["estimate", "--configfile", str(ROOT / "config" / "quick.yaml"),
+                 str(ROOT / "config" / "bulk_validation.yaml")]) == 0
+    out = capsys.readouterr().out
+    overlay = yaml.safe_load((ROOT / "config" / "bulk_validation.yaml").read_text())["accuracy"]["bulk_vs_walls"]
+    assert all(cell in out for cell in overlay["cells"])
+    assert f"{len(overlay['cells']) * len(overlay['seeds'])} DEM cases" in out and "core-hours" in out
+
+
+def test_estimate_without_the_block_exits_2_naming_it(capsys):
+    from dem_study.bulk_cli import main
+    assert main(["estimate", "--configfile", str(ROOT / "config" / "ci.yaml")]) == 2
+    assert "accuracy.bulk_vs_walls" in capsys.readouterr().err
