@@ -31,6 +31,8 @@ from scipy.stats import circmean
 
 from model.laws import fabric_angle_deg, fabric_norm
 
+from .series import DEMInputError
+
 __all__ = ["STEADY_FRACTION", "STEADY_COLUMNS", "PRE_REVERSAL_WINDOW", "MIN_PRE_REVERSAL_SAMPLES",
            "REVERSAL_DEAD_BAND", "REVERSAL_MIN_RUN", "steady_window", "steady_values", "fabric_norm",
            "fabric_angle_deg", "axial_mean", "angle_difference", "reversal_indices", "pre_reversal_state",
@@ -323,7 +325,7 @@ def split_transients(pre, run, meta=None, window: float = PRE_REVERSAL_WINDOW, w
 
     Raises
     ------
-    ValueError
+    DEMInputError
         A stated reversal time outside [end of the pre-shear, end of the run], times
         not increasing, a run whose rate never opposes the pre-shear's, a sidecar
         that lists more than one reversal where the rate reverses a different
@@ -333,7 +335,7 @@ def split_transients(pre, run, meta=None, window: float = PRE_REVERSAL_WINDOW, w
     g_all = np.concatenate([pre["gammadot"].to_numpy(dtype=float), run["gammadot"].to_numpy(dtype=float)])
     found = reversal_indices(g_all)
     if found.size == 0:
-        raise ValueError(f"{what}: the rate never opposes the pre-shear's "
+        raise DEMInputError(f"{what}: the rate never opposes the pre-shear's "
                          f"(for {REVERSAL_MIN_RUN} samples in a row): no reversal in this run")
     stated = reversal_times(meta or {})
     n_pre = len(pre)
@@ -352,12 +354,12 @@ def split_transients(pre, run, meta=None, window: float = PRE_REVERSAL_WINDOW, w
         for k, tk in enumerate(starts):
             tol = 1e-9 * max(1.0, abs(tk))
             if not (t_pre_end - tol <= tk <= t[-1]):
-                raise ValueError(f"{what}: sidecar reversal time {tk} (reversal {k + 1}) lies outside "
+                raise DEMInputError(f"{what}: sidecar reversal time {tk} (reversal {k + 1}) lies outside "
                                  f"[end of pre-shear {t_pre_end}, end of run {t[-1]}]")
         if np.any(np.diff(starts) <= 0):
-            raise ValueError(f"{what}: sidecar reversal times {starts} do not increase")
+            raise DEMInputError(f"{what}: sidecar reversal times {starts} do not increase")
         if len(starts) > 1 and len(starts) != found.size:
-            raise ValueError(f"{what}: the sidecar lists {len(starts)} reversals, the rate reverses "
+            raise DEMInputError(f"{what}: the sidecar lists {len(starts)} reversals, the rate reverses "
                              f"{found.size} time(s) (for {REVERSAL_MIN_RUN} samples in a row)")
         strains = [float(run["strain"].iloc[int(np.searchsorted(t, tk - 1e-9 * max(1.0, abs(tk))))])
                    if sk is None else sk for tk, sk in zip(starts, strains)]
@@ -376,7 +378,7 @@ def split_transients(pre, run, meta=None, window: float = PRE_REVERSAL_WINDOW, w
     for k in range(len(starts)):
         data = run.iloc[lo[k]: lo[k + 1]].reset_index(drop=True)
         if len(data) < min_samples:
-            raise ValueError(f"{what}: only {len(data)} samples after reversal {k + 1} (t = {starts[k]}), "
+            raise DEMInputError(f"{what}: only {len(data)} samples after reversal {k + 1} (t = {starts[k]}), "
                              f"at least {min_samples} are needed")
         leg = history if k == 0 else out[-1].data
         initial = pre_reversal_state(leg, window)
