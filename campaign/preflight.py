@@ -465,6 +465,17 @@ def scene_problems(config: dict, root=ROOT) -> list[str]:
     return out
 
 
+def _schedule_hint(line: str, config: dict) -> str:
+    """A schema line about a protocol that is neither heaviside, sinusoidal nor a schedule: say what it could be."""
+    protocols = config.get("protocols") if isinstance(config.get("protocols"), dict) else {}
+    for name, spec in protocols.items():
+        if (name not in ("heaviside", "sinusoidal") and line.startswith(f"config error: protocols.{name}: ")
+                and not (isinstance(spec, dict) and {"schedule", "train"} & set(spec))):
+            return (line + " (a protocol other than heaviside and sinusoidal is a reversal schedule: "
+                    "{schedule: [segments]} or {train: {every, reversals}}, docs/scene.md)")
+    return line
+
+
 def check(config: dict, configfiles=(), schema_path=SCHEMA, root=ROOT) -> list[str]:
     """Every problem of the config, one line each; empty when the campaign may start.
 
@@ -482,7 +493,7 @@ def check(config: dict, configfiles=(), schema_path=SCHEMA, root=ROOT) -> list[s
             out.append("config error: loading: give inertial_numbers or wall_velocities, not both")
     out += finite_problems(config)
     # (the "not both" line above says what the schema's oneOf says at length)
-    out += [line for line in schema_problems(config, schema_path)
+    out += [_schedule_hint(line, config) for line in schema_problems(config, schema_path)
             if not (out and line.startswith("config error: loading: {") and "is valid under each of" in line)]
     if out:
         return out

@@ -100,6 +100,12 @@ def test_the_config_schema_rejects_a_bad_segment_naming_the_key(spec, key):
     assert any(p.startswith(f"config error: {key}") for p in problems), problems
 
 
+def test_a_misspelt_protocol_is_named_with_what_a_schedule_looks_like():
+    problems = preflight.check(ci_with_protocol("heavyside", {"strain": 0.4}))
+    assert len(problems) == 1 and problems[0].startswith("config error: protocols.heavyside: ")
+    assert "is a reversal schedule: {schedule: [segments]} or {train: {every, reversals}}" in problems[0]
+
+
 def test_the_preflight_names_a_segment_shorter_than_one_sample_and_a_transition_longer_than_its_segment():
     problems = preflight.check(ci_with_protocol("double", {"schedule": [
         {"strain": 0.0001, "direction": -1},
