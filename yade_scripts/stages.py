@@ -1,4 +1,10 @@
-"""The four stages and their controller (sampling, progress, checkpoints, guards).
+"""The stages and their controller (sampling, progress, checkpoints, guards).
+
+Stages: pack, preshear, and the reversal stages, each a schedule of segments
+(scene.segments): heaviside and sinusoidal are one segment, a reversal schedule
+of the scene's `schedules` section several. A segment boundary falls between two
+run chunks, where the controller writes the row just before a reversal and turns
+the wall speed (at once, or through a per-step half cosine).
 
 One controller per process. It runs inside a PyRunner at the sampling interval:
 writes one CSV row, checks the guards, prints progress and, every
