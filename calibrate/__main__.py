@@ -6,11 +6,22 @@ DEM input (``DEMInputError``) or bad options.
 from __future__ import annotations
 
 import argparse
+import re
 import sys
 from pathlib import Path
 
 from . import backsolve, freeform, io, route2, smoothing
 from .pipeline import Settings, run
+
+PROTOCOL_NAME = re.compile(r"^[a-z][a-z0-9_]*$")
+
+
+def protocol_name(text: str) -> str:
+    """A reversal protocol's name: heaviside, sinusoidal or a reversal schedule's (lower case, digits, '_')."""
+    if not PROTOCOL_NAME.match(text) or text == "preshear":
+        raise argparse.ArgumentTypeError(f"invalid protocol {text!r}: heaviside, sinusoidal or a reversal "
+                                         "schedule's name (lower-case letters, digits, '_')")
+    return text
 
 
 def parser() -> argparse.ArgumentParser:
@@ -19,7 +30,8 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--dem", nargs="+", required=True, metavar="CASE_DIR",
                    help="case directories results/dem/<case>/ (seeds of one pressure and I form the ensemble)")
     p.add_argument("--out", required=True, help="output directory, e.g. results/calibration")
-    p.add_argument("--protocols", nargs="+", default=list(io.REVERSAL_PROTOCOLS), choices=io.REVERSAL_PROTOCOLS)
+    p.add_argument("--protocols", nargs="+", default=list(io.REVERSAL_PROTOCOLS), type=protocol_name,
+                   help="reversal runs to learn from: heaviside, sinusoidal or a reversal schedule's name")
     g = p.add_argument_group("smoothing (Savitzky-Golay in path strain)")
     g.add_argument("--sg-fine-window", type=float, default=sd.fine_window, help="window (strain) after a reversal")
     g.add_argument("--sg-coarse-window", type=float, default=sd.coarse_window, help="window (strain) elsewhere")

@@ -1,7 +1,9 @@
 r"""Read and validate the DEM time series (docs/data-contract.md).
 
 A *case directory* ``results/dem/<case>/`` holds ``preshear.csv``,
-``heaviside.csv``, ``sinusoidal.csv`` and JSON sidecars. Its name encodes
+``heaviside.csv``, ``sinusoidal.csv`` (and a CSV per reversal schedule) and
+JSON sidecars. Each reversal within a run is one transient
+(``transient_runs``). Its name encodes
 pressure, inertial number and seed (``p<P>_I<I>_s<seed>``); cases that differ
 only by the seed form one *ensemble*.
 
@@ -30,7 +32,7 @@ from scipy.stats import t as student_t
 
 from dem_contract import (CONTRACT_COLUMNS, REVERSAL_PROTOCOLS, STEADY_FRACTION, DEMInputError, derived,
                           fabric_angle_deg, fabric_norm, pre_reversal_state, read_series, read_sidecar,
-                          reversal_indices, split_case_label, steady_window)
+                          reversal_indices, split_case_label, split_transients, steady_window)
 
 #: The columns the calibration computes with: they must be finite in every row.
 USED_COLUMNS = ("t", "strain", "gammadot", "A_xx", "A_xy", "sigma_xy", "p", "mu")
@@ -54,11 +56,17 @@ class Run:
         Ensemble key (the case name without its seed).
     seed : str
     protocol : str
-        ``preshear``, ``heaviside`` or ``sinusoidal``.
+        ``preshear``, ``heaviside``, ``sinusoidal``, or a reversal schedule's name; one
+        transient of a schedule with several reversals is ``<schedule>_r<k>``.
     data : pandas.DataFrame
         The contract columns, rows in time order.
     meta : dict
         The JSON sidecar (empty if absent).
+    schedule : str, optional
+        For one transient of a multi-reversal run: the run's protocol (its file's name).
+    initial_state : dict, optional
+        For such a transient: the state just before its reversal
+        (``dem_contract.split_transients``); None: the end of the pre-shear.
     """
 
     path: Path
@@ -68,6 +76,8 @@ class Run:
     protocol: str
     data: pd.DataFrame
     meta: dict = field(default_factory=dict)
+    schedule: str | None = None
+    initial_state: dict | None = None
 
     @property
     def label(self) -> str:
@@ -247,14 +257,39 @@ def read_case(case_dir, protocols=REVERSAL_PROTOCOLS, min_samples: int = MIN_SAM
     if not present:
         raise DEMInputError(f"{case_dir}: no reversal run of the protocols {', '.join(protocols)} "
                             f"(expected at least one of {', '.join(f'{p}.csv' for p in protocols)})")
-    runs = {p: read_run(case_dir / f"{p}.csv", p, min_samples) for p in present}
+    runs = {}
     g_pre = pre.data["gammadot"].to_numpy()
-    for r in runs.values():
+    for p in present:
+        r = read_run(case_dir / f"{p}.csv", p, min_samples)
         if reversal_indices(np.concatenate([g_pre, r.data["gammadot"].to_numpy()])).size == 0:
             raise DEMInputError(f"{r.path}: 'gammadot' never takes the sign opposite to the pre-shear's "
                                 f"(for {derived.REVERSAL_MIN_RUN} samples in a row): no reversal in this {r.protocol} run")
+        runs.update(transient_runs(pre, r, min_samples))
     group, seed = split_case_label(case_dir.name)
     return Case(path=case_dir, name=case_dir.name, group=group, seed=seed, preshear=pre, runs=runs)
+
+
+def transient_runs(pre: Run, run: Run, min_samples: int = MIN_SAMPLES) -> dict:
+    """A reversal run as the transients the calibration fits: protocol -> Run.
+
+    A run with one reversal (heaviside, sinusoidal) is one transient, kept whole under
+    its protocol. A reversal schedule's run with several reversals
+    (``dem_contract.split_transients``) gives one Run per reversal, ``<protocol>_r<k>``,
+    holding its rows from that reversal to the next and the state just before it
+    (``initial_state``), whichever direction it shears in.
+    """
+    transients = split_transients(pre.data, run.data, run.meta, what=str(run.path))
+    if len(transients) == 1:
+        return {run.protocol: run}
+    out = {}
+    for tr in transients:
+        name = f"{run.protocol}_r{tr.index}"
+        if len(tr.data) < min_samples:
+            raise DEMInputError(f"{run.path}: only {len(tr.data)} samples after reversal {tr.index} "
+                                f"(t = {tr.t0:g}), at least {min_samples} are needed (--min-samples)")
+        out[name] = Run(path=run.path, case=run.case, group=run.group, seed=run.seed, protocol=name, data=tr.data,
+                        meta=dict(run.meta, reversal=tr.index), schedule=run.protocol, initial_state=tr.initial)
+    return out
 
 
 def read_cases(case_dirs, protocols=REVERSAL_PROTOCOLS, min_samples: int = MIN_SAMPLES) -> list:
@@ -267,7 +302,7 @@ def read_cases(case_dirs, protocols=REVERSAL_PROTOCOLS, min_samples: int = MIN_S
         raise DEMInputError("no case directory given")
     cases = [read_case(c, protocols, min_samples) for c in case_dirs]
     for p in protocols:
-        if not any(p in c.runs for c in cases):
+        if not any(p in c.runs or any(r.schedule == p for r in c.runs.values()) for c in cases):
             raise DEMInputError(f"no case holds a {p} run ({p}.csv missing in "
                                 f"{', '.join(str(c.path) for c in cases)}); drop it from --protocols")
     seen = set()

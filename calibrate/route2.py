@@ -135,8 +135,9 @@ def prepare(cases, samples: pd.DataFrame, settings_backsolve) -> list:
             sm = samples[(samples["case"] == c.name) & (samples["protocol"] == proto)]
             keep = sm["rate_frac"].to_numpy() >= settings_backsolve.rate_min
             sm = sm[keep]
+            start = run.initial_state or pre   # a schedule's later reversal starts from the state before it
             out.append(Replay(
-                label=f"{c.name}/{proto}", case=c.name, A0=(pre["A_xx"], pre["A_xy"]),
+                label=f"{c.name}/{proto}", case=c.name, A0=(start["A_xx"], start["A_xy"]),
                 pieces=[(sg, e - b0) for sg, b0, e in segs if e - b0 > 0],
                 s=sm["s"].to_numpy(), g=sm["g"].to_numpy(), a=sm["a_raw"].to_numpy(), b=sm["b_raw"].to_numpy(),
                 mu=(sm["sigma_xy_over_p"] * sm["g"]).to_numpy(),

@@ -205,8 +205,28 @@ def _bulk_problems(H_over_d, bulk, gap):
     return []
 
 
+def protocol_segments(name: str, spec: dict) -> list[dict] | None:
+    """The segments of one protocol (yade_scripts/scene.py ``segments``); None when the DEM's validator refuses it.
+
+    heaviside and sinusoidal are one segment; a schedule's train shorthand is expanded.
+    """
+    module = _scene_module()
+    try:
+        if name in ("heaviside", "sinusoidal"):
+            return module.segments({name: spec}, name)
+        return module.segments({"schedules": module._check_schedules({name: spec})}, name)
+    except (module.SceneError, KeyError, TypeError):
+        return None  # scene_problems names it
+
+
+def protocol_strain(name: str, spec: dict) -> float:
+    """The strain at full rate a protocol runs (the sum of its segments')."""
+    segs = protocol_segments(name, spec)
+    return sum(seg["strain"] for seg in segs) if segs else float(spec.get("strain", 0.0))
+
+
 def protocol_problems(config: dict) -> list[str]:
-    """A protocol longer than its transition, and every stage at least one sampling interval long."""
+    """A protocol longer than its transition, and every stage (every segment) at least one sampling interval long."""
     out, s = [], config["sampling"]
     after_reversal = s["fine_interval"] if s["fine_window"] > 0 else s["coarse_interval"]
     sin = config["protocols"].get("sinusoidal")
@@ -216,6 +236,25 @@ def protocol_problems(config: dict) -> list[str]:
                            "the run would stop inside the half cosine",
                            f"transition_strain <= {_v(sin['strain'])}"))
     for name, spec in config["protocols"].items():
+        if "schedule" in spec or "train" in spec:
+            keys = ([f"protocols.{name}.schedule[{i}].strain" for i in range(len(spec["schedule"]))]
+                    if "schedule" in spec else [f"protocols.{name}.train.every"])
+            values = [seg["strain"] for seg in spec["schedule"]] if "schedule" in spec else [spec["train"]["every"]]
+            if "schedule" in spec and all(seg["direction"] == 1 for seg in spec["schedule"]):
+                out.append(problem(f"protocols.{name}.schedule[*].direction", None,
+                                   "no reversal: every segment has direction +1 (the pre-shear's)",
+                                   "at least one segment with direction -1",
+                                   shown=str([seg["direction"] for seg in spec["schedule"]])))
+            for i, (seg, lim) in enumerate(zip(spec.get("schedule") or [spec["train"]], values)):
+                if seg.get("transition_strain", 0.0) > lim:
+                    out.append(problem(keys[i].rsplit(".", 1)[0] + ".transition_strain", seg["transition_strain"],
+                                       f"is longer than {keys[i]} = {_v(lim)}: the half cosine would not end",
+                                       f"transition_strain <= {_v(lim)}"))
+            for key, value in zip(keys, values):
+                if value < after_reversal:
+                    out.append(problem(key, value, f"shorter than one sample ({_v(after_reversal)} of strain "
+                                       "after a reversal)", f"strain >= {_v(after_reversal)}"))
+            continue
         if spec["strain"] < after_reversal:
             out.append(problem(f"protocols.{name}.strain", spec["strain"],
                                f"shorter than one sample ({_v(after_reversal)} of strain after the reversal)",
@@ -270,6 +309,9 @@ def sample_count_problems(config: dict, root=ROOT) -> list[str]:
     s, out = config["sampling"], []
     runs = [("preshear.strain", config["preshear"]["strain"], s["fine_window"])]
     for name, spec in config["protocols"].items():
+        if "schedule" in spec or "train" in spec:   # one file: its whole strain (a lower bound of its rows)
+            runs.append((f"protocols.{name} (its segments' strain)", protocol_strain(name, spec), s["fine_window"]))
+            continue
         runs.append((f"protocols.{name}.strain", spec["strain"], spec.get("transition_strain", 0.0) + s["fine_window"]))
     for key, strain, fine_strain in runs:
         rows = expected_rows(strain, fine_strain, s)
@@ -423,6 +465,17 @@ def scene_problems(config: dict, root=ROOT) -> list[str]:
     return out
 
 
+def _schedule_hint(line: str, config: dict) -> str:
+    """A schema line about a protocol that is neither heaviside, sinusoidal nor a schedule: say what it could be."""
+    protocols = config.get("protocols") if isinstance(config.get("protocols"), dict) else {}
+    for name, spec in protocols.items():
+        if (name not in ("heaviside", "sinusoidal") and line.startswith(f"config error: protocols.{name}: ")
+                and not (isinstance(spec, dict) and {"schedule", "train"} & set(spec))):
+            return (line + " (a protocol other than heaviside and sinusoidal is a reversal schedule: "
+                    "{schedule: [segments]} or {train: {every, reversals}}, docs/scene.md)")
+    return line
+
+
 def check(config: dict, configfiles=(), schema_path=SCHEMA, root=ROOT) -> list[str]:
     """Every problem of the config, one line each; empty when the campaign may start.
 
@@ -440,7 +493,7 @@ def check(config: dict, configfiles=(), schema_path=SCHEMA, root=ROOT) -> list[s
             out.append("config error: loading: give inertial_numbers or wall_velocities, not both")
     out += finite_problems(config)
     # (the "not both" line above says what the schema's oneOf says at length)
-    out += [line for line in schema_problems(config, schema_path)
+    out += [_schedule_hint(line, config) for line in schema_problems(config, schema_path)
             if not (out and line.startswith("config error: loading: {") and "is valid under each of" in line)]
     if out:
         return out

@@ -4,6 +4,7 @@ yade_scripts validates the scene again when it reads it.
 """
 from __future__ import annotations
 
+import copy
 import json
 from pathlib import Path
 
@@ -11,6 +12,8 @@ from pathlib import Path
 PASSTHROUGH = ["timestep", "pack", "preshear", "sampling", "effects", "run", "guards"]
 # Scene blocks that cannot change a DEM result: wall-clock intervals of checkpoints and progress lines.
 NOT_IN_RESULT = ["run"]
+# Protocols with a scene section of their own name; every other protocol is a reversal schedule.
+FIXED_PROTOCOLS = ("heaviside", "sinusoidal")
 # Config cell keys that are the scene's geometry; cell.kind and cell.mass go to the scene's cell section.
 GEOMETRY_KEYS = ("H_over_d", "W_over_H")
 
@@ -44,7 +47,10 @@ def scene_from_config(config: dict, case: dict, label: str) -> dict:
     if kind == "periodic":   # no walls, no band next to them: the schema's default is for the wall cell
         scene.get("sampling", {}).pop("bulk_exclusion_d", None)
     for protocol, spec in config["protocols"].items():
-        scene[protocol] = dict(spec)
+        if protocol in FIXED_PROTOCOLS:
+            scene[protocol] = dict(spec)
+        else:   # a reversal schedule (docs/scene.md): kept, shorthand and all, in the scene's schedules
+            scene.setdefault("schedules", {})[protocol] = copy.deepcopy(spec)
     return scene
 
 

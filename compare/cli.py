@@ -22,9 +22,17 @@ import sys
 import time
 from pathlib import Path
 
-from .dem import DEMInputError, REVERSAL_PROTOCOLS
+from .dem import PROTOCOL_NAME, REVERSAL_PROTOCOLS, DEMInputError
 
 FIGURE_NAMES = {"heaviside": "fig4_heaviside.png", "sinusoidal": "fig5_sinusoidal.png"}
+
+
+def protocol_name(text: str) -> str:
+    """A reversal protocol's name: heaviside, sinusoidal or a reversal schedule's (lower case, digits, '_')."""
+    if not PROTOCOL_NAME.match(text) or text == "preshear":
+        raise argparse.ArgumentTypeError(f"invalid protocol {text!r}: heaviside, sinusoidal or a reversal "
+                                         "schedule's name (lower-case letters, digits, '_')")
+    return text
 
 
 def _cmd_predict(args):
@@ -38,7 +46,7 @@ def _cmd_predict(args):
     c.predictions.to_csv(out / "predictions.csv", index=False)
     c.errors.to_csv(out / "errors.csv", index=False)
     c.claims.to_csv(out / "claims.csv", index=False)
-    for protocol in args.protocols:
+    for protocol in (p for p in args.protocols if p in FIGURE_NAMES):   # a schedule has tables, no figure
         figures.reversal_figure(c.ensembles, protocol, out / FIGURE_NAMES[protocol], zoom=args.zoom,
                                 title=f"{protocol} reversal: DEM against Model 1 and Model 2 "
                                       f"(calibration set '{args.set}')")
@@ -91,7 +99,8 @@ def build_parser():
         p.add_argument("--dem", nargs="+", required=True, help="DEM case directories results/dem/<label>")
         p.add_argument("--params", required=True, help="params.yaml of the calibration set")
         p.add_argument("--set", default="all", help="calibration set name (a column of the tables)")
-        p.add_argument("--protocols", nargs="+", default=list(REVERSAL_PROTOCOLS), choices=REVERSAL_PROTOCOLS)
+        p.add_argument("--protocols", nargs="+", default=list(REVERSAL_PROTOCOLS), type=protocol_name,
+                       help="heaviside, sinusoidal or a reversal schedule's name (one row group per reversal)")
         p.add_argument("--model2-friction", default="quadratic", choices=("quadratic", "eq2"),
                        help="friction law of Model 2 (default: its own, the quadratic law of [15])")
         p.add_argument("--out", required=True, help="output directory")

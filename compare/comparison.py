@@ -30,7 +30,7 @@ from dem_contract import DEMInputError, angle_difference, fabric_angle_deg, fabr
 from model import load_params, steady_state
 
 from . import metrics
-from .dem import load_reversal
+from .dem import load_reversals
 from .predict import DEFAULT_FRICTION, MODELS, predict
 from .metrics import QUANTITIES
 
@@ -154,15 +154,14 @@ def run(case_dirs, params_path, protocols, set_name="all", train_cases=None, tra
     train_protocols = set(protocols if train_protocols is None else train_protocols)
     pred_rows, err_rows, claim_rows, ensembles = [], [], [], {}
     steady = {}
-    for protocol in protocols:
-        revs = [load_reversal(d, protocol) for d in case_dirs_with(case_dirs, protocol)]
+    for protocol, key, revs in transient_groups(case_dirs, protocols):
         preds = {m: [predict(r, params, m, friction[m]) for r in revs] for m in MODELS}
         sign = -1 if np.median(revs[0].data["gammadot"].to_numpy()[-5:]) < 0 else 1
         for m in MODELS:
             steady.setdefault((m, sign), model_steady(params, m, friction[m], sign))
         steady_here = {m: steady[(m, sign)] for m in MODELS}
         for i, r in enumerate(revs):
-            base = dict(set=set_name, level="seed", case=r.label, group=r.group, protocol=protocol,
+            base = dict(set=set_name, level="seed", case=r.label, group=r.group, protocol=key,
                         in_sample=r.label in train_cases and protocol in train_protocols)
             curves, errors, claims = _seed_rows(r, {m: preds[m][i] for m in MODELS}, base, steady_here, dem_smooth)
             pred_rows += curves
@@ -171,15 +170,31 @@ def run(case_dirs, params_path, protocols, set_name="all", train_cases=None, tra
         for group in dict.fromkeys(r.group for r in revs):
             idx = [i for i, r in enumerate(revs) if r.group == group]
             grevs = [revs[i] for i in idx]
-            base = dict(set=set_name, level="ensemble", case=group, group=group, protocol=protocol,
+            base = dict(set=set_name, level="ensemble", case=group, group=group, protocol=key,
                         in_sample=all(r.label in train_cases for r in grevs) and protocol in train_protocols)
             ens, errors, claims = _ensemble_rows(grevs, {m: [preds[m][i] for i in idx] for m in MODELS}, base,
                                                  steady_here, friction, dem_smooth)
-            ensembles[(group, protocol)] = ens
+            ensembles[(group, key)] = ens
             err_rows += errors
             claim_rows += claims
     return Comparison(predictions=pd.concat(pred_rows, ignore_index=True), errors=pd.DataFrame(err_rows),
                       claims=pd.DataFrame(claim_rows), ensembles=ensembles)
+
+
+def transient_groups(case_dirs, protocols):
+    """``(protocol, key, reversals)`` for every transient the runs hold (``dem.load_reversals``).
+
+    A heaviside or sinusoidal protocol is one group under its own name; a reversal
+    schedule with several reversals one group per reversal, ``<protocol>_r<k>``, holding
+    the k-th reversal of every case that ran it (the same direction and place in the
+    schedule across seeds, so they form one ensemble).
+    """
+    for protocol in protocols:
+        per_case = [load_reversals(d, protocol) for d in case_dirs_with(case_dirs, protocol)]
+        n = max(len(revs) for revs in per_case)
+        for k in range(n):
+            yield protocol, (protocol if n == 1 else f"{protocol}_r{k + 1}"), [revs[k] for revs in per_case
+                                                                              if len(revs) > k]
 
 
 def case_dirs_with(case_dirs, protocol):

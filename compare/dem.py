@@ -13,7 +13,11 @@ Conventions
 -----------
 - The reversal starts where the reversal sidecar says (``reversal_t``,
   ``reversal_strain``, docs/data-contract.md; rows before it are dropped), or
-  at the first sample of the reversal CSV when the sidecar lacks them.
+  at the first sample of the reversal CSV when the sidecar lacks them. A
+  reversal schedule's run holds several reversals (the sidecar's
+  ``reversals``): ``load_reversals`` splits it into one ``Reversal`` per
+  reversal (``dem_contract.split_transients``), each from its reversal to the
+  next, started from the state just before it.
 - The initial fabric ``A0`` is the mean of ``(A_xx, A_xy)`` over the pre-shear
   samples within ``a0_window`` strain of its end (``dem_contract.pre_reversal_state``,
   the same state the calibration bounds X_c with): the DEM fabric just before
@@ -31,6 +35,7 @@ Conventions
 """
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -38,8 +43,10 @@ import numpy as np
 import pandas as pd
 
 from dem_contract import (PRE_REVERSAL_WINDOW, REVERSAL_PROTOCOLS, DEMInputError, fabric_angle_deg, fabric_norm,
-                          pre_reversal_state, read_series, read_sidecar, reversal_indices, split_case_label,
-                          steady_values)
+                          read_series, read_sidecar, split_case_label, split_transients, steady_values)
+
+#: A reversal protocol's name: heaviside, sinusoidal or a schedule's (docs/scene.md).
+PROTOCOL_NAME = re.compile(r"^[a-z][a-z0-9_]*$")
 
 USED_COLUMNS = ("t", "strain", "gammadot", "A_xx", "A_xy", "mu")
 A0_WINDOW = PRE_REVERSAL_WINDOW   # strain over which the pre-reversal fabric is averaged
@@ -88,13 +95,15 @@ class Reversal:
 
 
 def load_reversal(case_dir, protocol: str, a0_window: float = A0_WINDOW) -> Reversal:
-    """Read ``<case_dir>/preshear.csv`` and ``<case_dir>/<protocol>.csv``.
+    """Read ``<case_dir>/preshear.csv`` and ``<case_dir>/<protocol>.csv``: its first reversal.
 
     Parameters
     ----------
     case_dir : str or Path
         ``results/dem/<label>``.
-    protocol : {"heaviside", "sinusoidal"}
+    protocol : str
+        ``heaviside``, ``sinusoidal`` or a reversal schedule's name (``load_reversals``
+        gives each of a schedule's reversals).
     a0_window : float
         Strain window at the end of the pre-shear over which A0 is averaged.
 
@@ -104,44 +113,43 @@ def load_reversal(case_dir, protocol: str, a0_window: float = A0_WINDOW) -> Reve
         Bad files (see ``dem_contract.read_series``), a reversal that never shears against
         the pre-shear, or a sidecar reversal time outside the run.
     """
+    return load_reversals(case_dir, protocol, a0_window)[0]
+
+
+def load_reversals(case_dir, protocol: str, a0_window: float = A0_WINDOW) -> list:
+    """Every reversal of ``<case_dir>/<protocol>.csv``, one ``Reversal`` each (``dem_contract.split_transients``).
+
+    A heaviside or sinusoidal run gives one; a reversal schedule one per reversal, each
+    from its own reversal to the next, started from the state just before it
+    (``A0``, ``rate_before``) and labelled with its number (``meta["reversal"]``).
+    """
     case_dir = Path(case_dir)
-    if protocol not in REVERSAL_PROTOCOLS:
-        raise DEMInputError(f"{case_dir}: protocol {protocol!r} is not one of {REVERSAL_PROTOCOLS}")
+    if not isinstance(protocol, str) or not PROTOCOL_NAME.match(protocol) or protocol == "preshear":
+        raise DEMInputError(f"{case_dir}: protocol {protocol!r} is not a reversal protocol "
+                            f"({', '.join(REVERSAL_PROTOCOLS)} or a schedule's name)")
     if not (a0_window > 0):
         raise DEMInputError(f"a0_window = {a0_window!r} must be positive")
     pre = read_series(case_dir / "preshear.csv", USED_COLUMNS, MIN_SAMPLES, what="the pre-shear of the case")
     path = case_dir / f"{protocol}.csv"
     rev = read_series(path, USED_COLUMNS, MIN_SAMPLES, what=f"the {protocol} run of the case")
     meta = read_sidecar(path)
-    t_rev = s_rev0 = None
-    if "reversal_t" in meta:   # docs/data-contract.md: reversal_t, reversal_strain (start of the reversal)
-        t_rev = float(meta["reversal_t"])
-        tol = 1e-9 * max(1.0, abs(t_rev))
-        if not (pre["t"].iloc[-1] - tol <= t_rev <= rev["t"].iloc[-1]):
-            raise DEMInputError(f"{path}: sidecar reversal_t = {t_rev} lies outside "
-                                f"[end of pre-shear {pre['t'].iloc[-1]}, end of run {rev['t'].iloc[-1]}]")
-        rev = rev[rev["t"] >= t_rev - tol].reset_index(drop=True)
-        if len(rev) < MIN_SAMPLES:
-            raise DEMInputError(f"{path}: fewer than {MIN_SAMPLES} samples after reversal_t = {t_rev}")
-        if "reversal_strain" in meta:
-            s_rev0 = float(meta["reversal_strain"])
-    # the state before the reversal (dem_contract), and a check that the reversal opposes it
-    st = pre_reversal_state(pre, a0_window)
-    g_pre = st["gammadot"]
-    if g_pre == 0.0 or reversal_indices(np.concatenate([pre["gammadot"].to_numpy(), rev["gammadot"].to_numpy()])).size == 0:
-        raise DEMInputError(f"{path}: the rate never opposes the pre-shear's (median {g_pre:.4g}): no reversal")
-    a0, b0 = st["A_xx"], st["A_xy"]
+    transients = split_transients(pre, rev, meta, a0_window, what=str(path), min_samples=MIN_SAMPLES)
     steady = steady_values(pre)
-    data = rev.copy()
-    t0 = float(data["t"].iloc[0]) if t_rev is None else t_rev
-    strain0 = float(data["strain"].iloc[0]) if s_rev0 is None else s_rev0
-    data["tau"] = data["t"] - t0
-    st = data["strain"].to_numpy()
-    data["s_rev"] = abs(st[0] - strain0) + np.concatenate([[0.0], np.cumsum(np.abs(np.diff(st)))])
-    a, b = data["A_xx"].to_numpy(), data["A_xy"].to_numpy()
-    data["A_norm"], data["theta_A"] = fabric_norm(a, b), fabric_angle_deg(a, b)
     group, seed = split_case_label(case_dir.name)
-    return Reversal(label=case_dir.name, group=group, seed=seed, protocol=protocol, path=path, data=data,
-                    A0=(a0, b0), steady_A=steady["A_norm"], steady_mu=steady["mu"],
-                    steady_fabric=(steady["A_xx"], steady["A_xy"]), t0=t0, strain0=strain0,
-                    rate_before=g_pre, meta=meta)
+    out = []
+    for tr in transients:
+        g_pre = tr.initial["gammadot"]
+        if g_pre == 0.0:
+            raise DEMInputError(f"{path}: the rate before reversal {tr.index} does not move (median {g_pre:.4g})")
+        data = tr.data.copy()
+        data["tau"] = data["t"] - tr.t0
+        st = data["strain"].to_numpy()
+        data["s_rev"] = abs(st[0] - tr.strain0) + np.concatenate([[0.0], np.cumsum(np.abs(np.diff(st)))])
+        a, b = data["A_xx"].to_numpy(), data["A_xy"].to_numpy()
+        data["A_norm"], data["theta_A"] = fabric_norm(a, b), fabric_angle_deg(a, b)
+        out.append(Reversal(label=case_dir.name, group=group, seed=seed, protocol=protocol, path=path, data=data,
+                            A0=(tr.initial["A_xx"], tr.initial["A_xy"]), steady_A=steady["A_norm"],
+                            steady_mu=steady["mu"], steady_fabric=(steady["A_xx"], steady["A_xy"]), t0=tr.t0,
+                            strain0=tr.strain0, rate_before=g_pre,
+                            meta=meta if tr.n_reversals == 1 else dict(meta, reversal=tr.index)))
+    return out

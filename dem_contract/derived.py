@@ -17,17 +17,26 @@ report the same quantity of the same run agree (docs/data-contract.md).
 - ``reversal_indices``: where the sign of the shear rate flips, ignoring noise.
 - ``pre_reversal_state``: the state a reversal starts from (mean over the
   end of the pre-shear).
+- ``reversal_times`` / ``split_transients``: the reversals of a run (one, or
+  several for a reversal schedule) and the run split into transients, one per
+  reversal, each with the state just before it.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass, field
+
 import numpy as np
+import pandas as pd
 from scipy.stats import circmean
 
 from model.laws import fabric_angle_deg, fabric_norm
 
+from .series import DEMInputError
+
 __all__ = ["STEADY_FRACTION", "STEADY_COLUMNS", "PRE_REVERSAL_WINDOW", "MIN_PRE_REVERSAL_SAMPLES",
            "REVERSAL_DEAD_BAND", "REVERSAL_MIN_RUN", "steady_window", "steady_values", "fabric_norm",
-           "fabric_angle_deg", "axial_mean", "angle_difference", "reversal_indices", "pre_reversal_state"]
+           "fabric_angle_deg", "axial_mean", "angle_difference", "reversal_indices", "pre_reversal_state",
+           "Transient", "reversal_times", "split_transients"]
 
 #: Last fraction of a pre-shear's strain path taken as its steady state.
 STEADY_FRACTION = 0.5
@@ -229,3 +238,150 @@ def pre_reversal_state(pre, window: float = PRE_REVERSAL_WINDOW):
         win[-MIN_PRE_REVERSAL_SAMPLES:] = True
     a, b, mu = (float(pre[c].to_numpy()[win].mean()) for c in ("A_xx", "A_xy", "mu"))
     return {"A_xx": a, "A_xy": b, "mu": mu, "gammadot": rate, "gammadot_sign": g, "X": float(np.sqrt(2.0) * b * g)}
+
+
+def reversal_times(meta: dict):
+    """The start times of a run's reversals that its sidecar states, or None.
+
+    ``reversals`` (a reversal schedule: one entry per reversal, each with ``t``), else
+    ``reversal_t`` (heaviside, sinusoidal: one reversal), else None (detect them).
+    """
+    if meta.get("reversals"):
+        return [float(r["t"]) for r in meta["reversals"]], [float(r["strain"]) for r in meta["reversals"]]
+    if "reversal_t" in meta:
+        strain = meta.get("reversal_strain")
+        return [float(meta["reversal_t"])], [None if strain is None else float(strain)]
+    return None
+
+
+@dataclass
+class Transient:
+    """One reversal of a run and what follows it, up to the next reversal.
+
+    Attributes
+    ----------
+    index : int
+        The reversal's number in the run, from 1.
+    n_reversals : int
+        Reversals in the run.
+    data : pandas.DataFrame
+        The run's rows from the reversal's start to the next reversal (index reset).
+    t0, strain0 : float
+        Time and strain at which the reversal starts.
+    initial : dict
+        ``pre_reversal_state`` of the leg before the reversal (the pre-shear, or the
+        previous transient): ``A_xx, A_xy, mu, gammadot, gammadot_sign, X``.
+    sign : float
+        Sign of the shear rate after the reversal (``-initial["gammadot_sign"]``).
+    """
+
+    index: int
+    n_reversals: int
+    data: pd.DataFrame
+    t0: float
+    strain0: float
+    initial: dict
+    sign: float
+    meta: dict = field(default_factory=dict)
+
+
+def split_transients(pre, run, meta=None, window: float = PRE_REVERSAL_WINDOW, what: str = "run",
+                     min_samples: int = 1) -> list:
+    r"""Split a reversal run into transients, one per reversal.
+
+    The reversals start at the times the sidecar ``meta`` states (``reversal_times``);
+    without them they are detected on the pre-shear's rate followed by the run's
+    (``reversal_indices``): the first reversal at the run's first row when it
+    reverses the pre-shear, a later one at the last row before its new direction.
+
+    Transient :math:`k` holds the run's rows with :math:`t_k \le t < t_{k+1}` (to the
+    end for the last): a row at :math:`t_{k+1}` itself is the state just before that
+    reversal and closes transient :math:`k`; only the run's first row, when it lies at
+    the run's first reversal, opens a transient. Its initial state is
+    ``pre_reversal_state`` (mean over the last ``window`` strain) of the leg before
+    :math:`t_k`: the pre-shear for the first reversal (followed by the run's rows
+    before it, if the run first keeps the pre-shear's direction), transient
+    :math:`k-1` for the others. A single-reversal run (heaviside, sinusoidal) gives
+    one transient: the whole run from ``reversal_t`` on, started from the end of the
+    pre-shear.
+
+    Parameters
+    ----------
+    pre, run : pandas.DataFrame
+        The pre-shear and the reversal run (``t``, ``strain``, ``gammadot``, ``A_xx``,
+        ``A_xy``, ``mu``), each in time order.
+    meta : dict, optional
+        The run's sidecar (``reversals`` or ``reversal_t``, ``reversal_strain``).
+    window : float
+        Strain over which the state before a reversal is averaged.
+    what : str
+        The run's name in error messages (its file).
+    min_samples : int
+        Fewest rows a transient must hold.
+
+    Returns
+    -------
+    list of Transient
+
+    Raises
+    ------
+    DEMInputError
+        A stated reversal time outside [end of the pre-shear, end of the run], times
+        not increasing, a run whose rate never opposes the pre-shear's, a sidecar
+        that lists more than one reversal where the rate reverses a different
+        number of times, or a transient with fewer than ``min_samples`` rows.
+    """
+    t = run["t"].to_numpy(dtype=float)
+    g_all = np.concatenate([pre["gammadot"].to_numpy(dtype=float), run["gammadot"].to_numpy(dtype=float)])
+    found = reversal_indices(g_all)
+    if found.size == 0:
+        raise DEMInputError(f"{what}: the rate never opposes the pre-shear's "
+                         f"(for {REVERSAL_MIN_RUN} samples in a row): no reversal in this run")
+    stated = reversal_times(meta or {})
+    n_pre = len(pre)
+    if stated is None:
+        starts, strains = [], []
+        for i in found:
+            if i <= n_pre:   # at the junction: the run's first row (the pre-shear ends just before it)
+                starts.append(float(t[0]))
+                strains.append(float(run["strain"].iloc[0]))
+            else:
+                starts.append(float(t[i - n_pre - 1]))
+                strains.append(float(run["strain"].iloc[i - n_pre - 1]))
+    else:
+        starts, strains = stated
+        t_pre_end = float(pre["t"].iloc[-1])
+        for k, tk in enumerate(starts):
+            tol = 1e-9 * max(1.0, abs(tk))
+            if not (t_pre_end - tol <= tk <= t[-1]):
+                raise DEMInputError(f"{what}: sidecar reversal time {tk} (reversal {k + 1}) lies outside "
+                                 f"[end of pre-shear {t_pre_end}, end of run {t[-1]}]")
+        if np.any(np.diff(starts) <= 0):
+            raise DEMInputError(f"{what}: sidecar reversal times {starts} do not increase")
+        if len(starts) > 1 and len(starts) != found.size:
+            raise DEMInputError(f"{what}: the sidecar lists {len(starts)} reversals, the rate reverses "
+                             f"{found.size} time(s) (for {REVERSAL_MIN_RUN} samples in a row)")
+        strains = [float(run["strain"].iloc[int(np.searchsorted(t, tk - 1e-9 * max(1.0, abs(tk))))])
+                   if sk is None else sk for tk, sk in zip(starts, strains)]
+    # row ranges: transient k = [lo_k, lo_{k+1}); a row at t_k opens k only if it is the run's first row
+    lo = []
+    for k, tk in enumerate(starts):
+        tol = 1e-9 * max(1.0, abs(tk))
+        first = int(np.searchsorted(t, tk - tol))      # first row with t >= t_k
+        if 0 < first < len(t) and abs(t[first] - tk) <= tol:
+            first += 1   # the state just before the reversal, inside the run: it closes the leg before
+        lo.append(first)
+    lo.append(len(t))
+    # the leg before the first reversal: the pre-shear, and the run's rows before it if any
+    history = pre if lo[0] == 0 else pd.concat([pre, run.iloc[: lo[0]]], ignore_index=True)
+    out = []
+    for k in range(len(starts)):
+        data = run.iloc[lo[k]: lo[k + 1]].reset_index(drop=True)
+        if len(data) < min_samples:
+            raise DEMInputError(f"{what}: only {len(data)} samples after reversal {k + 1} (t = {starts[k]}), "
+                             f"at least {min_samples} are needed")
+        leg = history if k == 0 else out[-1].data
+        initial = pre_reversal_state(leg, window)
+        out.append(Transient(index=k + 1, n_reversals=len(starts), data=data, t0=float(starts[k]),
+                             strain0=float(strains[k]), initial=initial, sign=-initial["gammadot_sign"]))
+    return out

@@ -80,7 +80,8 @@ def _table(sim, rng, I, fabric_noise, mu_noise, strain0, t0):
 
 def write_case(case_dir, params, seed=1, model="model1", friction="eq2", I=1e-3, preshear_strain=1.0,
                reversal_strain=0.5, transition_strain=0.1, fabric_noise=0.0, mu_noise=0.0,
-               fine=0.001, fine_window=0.1, coarse=0.01, A_start=None, protocols=REVERSAL_PROTOCOLS):
+               fine=0.001, fine_window=0.1, coarse=0.01, A_start=None, protocols=REVERSAL_PROTOCOLS,
+               schedules=None):
     """Write one synthetic case directory and return its path.
 
     Parameters
@@ -106,6 +107,12 @@ def write_case(case_dir, params, seed=1, model="model1", friction="eq2", I=1e-3,
         Fabric at the start of the pre-shear; default the model's steady state.
     protocols : sequence of {"heaviside", "sinusoidal"}
         The reversal runs to write after the pre-shear.
+    schedules : dict, optional
+        Reversal schedules to write too, name -> list of (strain, direction) segments
+        with sharp reversals (direction relative to the pre-shear, as in docs/scene.md):
+        one run each, whose sidecar lists every reversal (``reversals``), sampled as
+        the DEM samples it (a row at each reversal inside the run, the state just
+        before it, then fine sampling again).
     """
     case_dir = Path(case_dir)
     case_dir.mkdir(parents=True, exist_ok=True)
@@ -130,15 +137,41 @@ def write_case(case_dir, params, seed=1, model="model1", friction="eq2", I=1e-3,
             raise ValueError(f"protocol {protocol!r} is not heaviside or sinusoidal")
         sim = simulate(params, tabulated(t, g), A0=A_end, t_eval=t, **kw)
         out[protocol] = _table(sim, rng, I, fabric_noise, mu_noise, preshear_strain, t_end)
+    reversals = {}
+    for name, segs in (schedules or {}).items():
+        out[name], reversals[name] = _schedule_run(params, segs, A_end, rng, I, fabric_noise, mu_noise,
+                                                   preshear_strain, t_end, fine, fine_window, coarse, kw)
     for name, table in out.items():
         table.to_csv(case_dir / f"{name}.csv", index=False)
         meta = {"synthetic": True, "generator": "dem_contract.synthetic.write_case", "model": model,
                 "friction": friction, "noise_seed": int(seed), "fabric_noise": fabric_noise,
                 "mu_noise": mu_noise, "inertial_number": I, "stage": name}
-        if name != "preshear":   # as docs/data-contract.md: the start of the reversal
+        if name in reversals:    # a schedule: every reversal, the first also as reversal_t, reversal_strain
+            meta.update(reversal_t=reversals[name][0]["t"], reversal_strain=reversals[name][0]["strain"],
+                        reversals=reversals[name])
+        elif name != "preshear":   # as docs/data-contract.md: the start of the reversal
             meta.update(reversal_t=t_end, reversal_strain=float(preshear_strain))
         (case_dir / f"{name}.json").write_text(json.dumps(meta, indent=1))
     return case_dir
+
+
+def _schedule_run(params, segs, A_end, rng, I, fabric_noise, mu_noise, strain0, t0, fine, fine_window, coarse, kw):
+    """One schedule's run: each segment integrated from the previous one's last fabric at a constant rate.
+
+    Returns the contract table and the sidecar's reversal list.
+    """
+    parts, rev, A, t_at, s_at, prev = [], [], A_end, 0.0, 0.0, 1
+    for k, (length, direction) in enumerate(segs):
+        t = strain_grid(length, fine, fine_window, coarse)
+        sim = simulate(params, tabulated(t, np.full_like(t, float(direction))), A0=A, t_eval=t, **kw)
+        A = (float(sim["A_xx"].iloc[-1]), float(sim["A_xy"].iloc[-1]))
+        if direction != prev:
+            rev.append({"t": t0 + t_at / I, "strain": strain0 + s_at, "direction": int(direction),
+                        "transition": "heaviside"})
+        sim = sim.assign(t=sim["t"] + t_at, strain=sim["strain"] + s_at)
+        parts.append(sim if k == 0 else sim.iloc[1:])   # the segment's first row is the previous one's last
+        t_at, s_at, prev = t_at + length, s_at + float(sim["strain"].iloc[-1] - sim["strain"].iloc[0]), direction
+    return _table(pd.concat(parts, ignore_index=True), rng, I, fabric_noise, mu_noise, strain0, t0), rev
 
 
 def write_ensemble(root, params, seeds=(1, 2, 3, 4), group="p1_I0.001", **kw):

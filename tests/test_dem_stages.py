@@ -263,15 +263,25 @@ def test_guards_stop_the_run(case, tmp_path, guard, match):
     assert not (cdir / "preshear.csv").exists()  # no half outputs
 
 
-def kill_preshear_after_first_checkpoint(scene, cdir):
-    """Start the pre-shear of ``cdir``, SIGKILL it 0.7 s after its first checkpoint; return its PID."""
-    resume = Path(cdir) / ".partial" / "preshear" / "resume.json"
+def kill_preshear_after_first_checkpoint(scene, cdir, stage="preshear", ready=None):
+    """Start the pre-shear (or ``stage``) of ``cdir``, SIGKILL it 0.7 s after its first checkpoint
+    (its first for which ``ready(resume.json's dict)`` is true, if given); return its PID."""
+    resume = Path(cdir) / ".partial" / stage / "resume.json"
     env = dict(os.environ, OMP_NUM_THREADS="1")
-    proc = subprocess.Popen(["yade", "-n", "-x", str(RUN), str(scene), "preshear", str(cdir)],
+    proc = subprocess.Popen(["yade", "-n", "-x", str(RUN), str(scene), stage, str(cdir)],
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
+
+    def checkpointed():
+        if not resume.exists():
+            return False
+        try:
+            return ready is None or ready(json.loads(resume.read_text()))
+        except json.JSONDecodeError:
+            return False
+
     try:
         t0 = time.time()
-        while not resume.exists():
+        while not checkpointed():
             assert proc.poll() is None, "the stage ended before its first checkpoint"
             assert time.time() - t0 < 120
             time.sleep(0.1)

@@ -1,6 +1,7 @@
 """Entry point: yade -n -x yade_scripts/run_stage.py <scene.json> <stage> <case_dir>
 
-Runs one stage (pack, preshear, heaviside, sinusoidal) of one case; see docs/scene.md.
+Runs one stage (pack, preshear, heaviside, sinusoidal, or a reversal schedule named in the
+scene's `schedules` section) of one case; see docs/scene.md.
 Exit codes: 0 done, 1 unexpected error, 2 bad scene or missing input, 3 guard fired,
 4 interrupted by SIGTERM or SIGINT (checkpoint written: rerun to resume),
 5 another live process runs this stage of this case (nothing touched).
@@ -14,11 +15,12 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(sys.argv[0])))
 import scene as scenemod  # noqa: E402
 import stagelock  # noqa: E402
 
-USAGE = "usage: yade -n -x yade_scripts/run_stage.py <scene.json> <pack|preshear|heaviside|sinusoidal> <case_dir>"
+USAGE = ("usage: yade -n -x yade_scripts/run_stage.py <scene.json> "
+         "<pack|preshear|heaviside|sinusoidal|<schedule name>> <case_dir>")
 
 
 def main(argv):
-    if len(argv) != 3 or argv[1] not in scenemod.STAGES:
+    if len(argv) != 3 or not (argv[1] in scenemod.STAGES or scenemod.PROTOCOL_NAME.match(argv[1])):
         print(USAGE, file=sys.stderr)
         return 2
     path, stage, case_dir = argv

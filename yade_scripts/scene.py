@@ -7,6 +7,7 @@ whose message names the key.
 import hashlib
 import json
 import math
+import re
 
 INF = float("inf")
 REQUIRED = object()
@@ -102,6 +103,32 @@ WALL_ONLY = ("sampling.bulk_exclusion_d",)
 PERIODIC_ONLY = ("cell.mass",)
 STAGE_SECTIONS = {"heaviside": "heaviside", "sinusoidal": "sinusoidal"}
 
+# ---------------------------------------------------------------- reversal schedules
+# A schedule is a protocol of its own name, kept in the scene's `schedules` section:
+#   {"schedule": [{"strain": 0.2, "direction": -1, "transition": "heaviside"}, ...]}
+#   {"train": {"every": 0.2, "reversals": 6, "transition": "heaviside"}}
+# Directions are relative to the pre-shear (+1 its direction, -1 reversed); a segment
+# starts with a reversal when its direction differs from the one before it (the
+# pre-shear's for the first segment). A segment's strain is its duration as strain at
+# the nominal rate (time x gammadot), a half-cosine transition included.
+SCHEDULES = "schedules"
+PROTOCOL_NAME = re.compile(r"^[a-z][a-z0-9_]*$")
+RESERVED_NAMES = ("pack", "preshear", "scene", "final", "campaign_summary")
+TRANSITIONS = ("heaviside", "half_cosine")
+SEGMENT_SPEC = {
+    "strain": (_num(0, 100, lo_open=True), REQUIRED),
+    "direction": (dict(kind="direction"), REQUIRED),
+    "transition": (dict(kind="choice", choices=TRANSITIONS), "heaviside"),
+    "transition_strain": (_num(0, 10, lo_open=True), None),
+}
+TRAIN_SPEC = {
+    "every": (_num(0, 100, lo_open=True), REQUIRED),
+    "reversals": (_num(1, 1000, integer=True), REQUIRED),
+    "transition": (dict(kind="choice", choices=TRANSITIONS), "heaviside"),
+    "transition_strain": (_num(0, 10, lo_open=True), None),
+}
+MAX_SEGMENTS = 1000
+
 
 def _fmt_range(s):
     lo = "(" if s["lo_open"] else "["
@@ -117,6 +144,10 @@ def _check_value(name, spec, v):
         if v not in spec["choices"]:
             raise SceneError(f"scene error: {name} = {v!r} must be one of {', '.join(spec['choices'])}")
         return v
+    if kind == "direction":
+        if isinstance(v, bool) or v not in (-1, 1):
+            raise SceneError(f"scene error: {name} = {v!r} must be -1 (against the pre-shear) or +1 (with it)")
+        return int(v)
     if kind == "bool":
         if not isinstance(v, bool):
             raise SceneError(f"scene error: {name} = {v!r} must be true or false")
@@ -153,7 +184,7 @@ def validate(raw, stage=None):
     """
     if not isinstance(raw, dict):
         raise SceneError("scene error: the scene must be a JSON object")
-    known = set(SPEC) | {"seed", "meta"}
+    known = set(SPEC) | {"seed", "meta", SCHEDULES}
     for k in raw:
         if k not in known:
             raise SceneError(f"scene error: unknown key '{k}' (allowed: {', '.join(sorted(known))})")
@@ -192,6 +223,11 @@ def validate(raw, stage=None):
             else:
                 o[k] = default
         out[sec] = o
+    if SCHEDULES in raw:  # (absent: the validated scene stays as it was before schedules existed)
+        out[SCHEDULES] = _check_schedules(raw[SCHEDULES])
+    if stage is not None and stage not in STAGES and stage not in out.get(SCHEDULES, {}):
+        raise SceneError(f"scene error: stage {stage!r} is neither one of {', '.join(STAGES)} nor a schedule of "
+                         f"the scene's '{SCHEDULES}' section ({', '.join(out.get(SCHEDULES, {})) or 'none'})")
     _check_cell_kind(raw, out["cell"]["kind"])
     _check_contact_law(out)
     # cross-key checks
@@ -213,6 +249,109 @@ def validate(raw, stage=None):
         raise SceneError("scene error: geometry.W_over_H too small: the periodic width must hold 3 of the largest disks")
     if out["pack"]["initial_solid_fraction"] >= out["pack"]["solid_fraction_guess"]:
         raise SceneError("scene error: pack.initial_solid_fraction must be below pack.solid_fraction_guess")
+    return out
+
+
+def _check_keys(name, src, spec):
+    """Check one JSON object against a key -> (spec, default) table; return it with defaults filled in."""
+    if not isinstance(src, dict):
+        raise SceneError(f"scene error: {name} must be a JSON object")
+    for k in src:
+        if k not in spec:
+            raise SceneError(f"scene error: unknown key '{name}.{k}' (allowed: {', '.join(spec)})")
+    o = {}
+    for k, (sp, default) in spec.items():
+        if k in src:
+            o[k] = _check_value(f"{name}.{k}", sp, src[k])
+        elif default is REQUIRED:
+            raise SceneError(f"scene error: missing required key '{name}.{k}'")
+        else:
+            o[k] = default
+    return o
+
+
+def _check_transition(name, o, length_key):
+    """transition_strain: required by a half cosine (and within the segment), refused otherwise."""
+    if o["transition"] == "half_cosine":
+        if o["transition_strain"] is None:
+            raise SceneError(f"scene error: missing required key '{name}.transition_strain' "
+                             f"(needed by transition = half_cosine; allowed range (0, 10])")
+        if o["transition_strain"] > o[length_key]:
+            raise SceneError(f"scene error: {name}.transition_strain = {o['transition_strain']!r} is out of range "
+                             f"(0, {o[length_key]:g}]: longer than {name}.{length_key}, the half cosine would not end")
+    else:
+        if o["transition_strain"] is not None:
+            raise SceneError(f"scene error: {name}.transition_strain applies to transition = half_cosine only "
+                             f"({name}.transition = {o['transition']})")
+        del o["transition_strain"]
+    return o
+
+
+def _check_schedules(raw):
+    """The `schedules` section: name -> {"schedule": [segment, ...]} or {"train": {...}}."""
+    if not isinstance(raw, dict):
+        raise SceneError(f"scene error: section '{SCHEDULES}' must be a JSON object (name -> schedule)")
+    out = {}
+    for pname, spec in raw.items():
+        where = f"{SCHEDULES}.{pname}"
+        if not isinstance(pname, str) or not PROTOCOL_NAME.match(pname) or pname in STAGES + RESERVED_NAMES:
+            raise SceneError(f"scene error: {where}: a schedule's name must be lower-case letters, digits and '_', "
+                             f"starting with a letter, and not one of {', '.join(STAGES + RESERVED_NAMES)}")
+        if not isinstance(spec, dict) or len(spec) != 1 or next(iter(spec)) not in ("schedule", "train"):
+            raise SceneError(f"scene error: {where} must hold exactly one of 'schedule' (a list of segments) "
+                             f"or 'train' (every, reversals, transition)")
+        if "schedule" in spec:
+            segs = spec["schedule"]
+            if not isinstance(segs, list) or not 1 <= len(segs) <= MAX_SEGMENTS:
+                raise SceneError(f"scene error: {where}.schedule must be a list of 1 to {MAX_SEGMENTS} segments")
+            checked = [_check_transition(f"{where}.schedule[{i}]",
+                                         _check_keys(f"{where}.schedule[{i}]", seg, SEGMENT_SPEC), "strain")
+                       for i, seg in enumerate(segs)]
+            if all(seg["direction"] == 1 for seg in checked):
+                raise SceneError(f"scene error: {where}.schedule has no reversal: every segment has direction +1 "
+                                 f"(the pre-shear's); give at least one segment direction -1")
+            out[pname] = {"schedule": checked}
+        else:
+            out[pname] = {"train": _check_transition(f"{where}.train",
+                                                     _check_keys(f"{where}.train", spec["train"], TRAIN_SPEC),
+                                                     "every")}
+    return out
+
+
+def expand_train(train):
+    """The segments of a train: `reversals` segments of `every` strain, directions -1, +1, -1, ..."""
+    seg = {"strain": train["every"], "transition": train["transition"]}
+    if train["transition"] == "half_cosine":
+        seg["transition_strain"] = train["transition_strain"]
+    return [dict(seg, direction=-1 if k % 2 == 0 else 1) for k in range(train["reversals"])]
+
+
+def segments(scene, stage):
+    """The segments a reversal stage runs, each {strain, direction, transition[, transition_strain]}.
+
+    heaviside and sinusoidal are one-segment schedules: [{strain, -1, heaviside}] and
+    [{strain, -1, half_cosine, transition_strain}].
+    """
+    if stage == "heaviside":
+        return [{"strain": scene["heaviside"]["strain"], "direction": -1, "transition": "heaviside"}]
+    if stage == "sinusoidal":
+        s = scene["sinusoidal"]
+        return [{"strain": s["strain"], "direction": -1, "transition": "half_cosine",
+                 "transition_strain": s["transition_strain"]}]
+    spec = scene.get(SCHEDULES, {}).get(stage)
+    if spec is None:
+        raise SceneError(f"scene error: no schedule '{stage}' in the scene's '{SCHEDULES}' section")
+    return expand_train(spec["train"]) if "train" in spec else [dict(seg) for seg in spec["schedule"]]
+
+
+def reversal_strains(segs):
+    """Strain at full rate (from the stage's start) at which each reversal starts, with its segment index."""
+    out, at, prev = [], 0.0, 1
+    for k, seg in enumerate(segs):
+        if seg["direction"] != prev:
+            out.append((k, at))
+        prev = seg["direction"]
+        at += seg["strain"]
     return out
 
 

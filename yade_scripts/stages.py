@@ -1,4 +1,10 @@
-"""The four stages and their controller (sampling, progress, checkpoints, guards).
+"""The stages and their controller (sampling, progress, checkpoints, guards).
+
+Stages: pack, preshear, and the reversal stages, each a schedule of segments
+(scene.segments): heaviside and sinusoidal are one segment, a reversal schedule
+of the scene's `schedules` section several. A segment boundary falls between two
+run chunks, where the controller writes the row just before a reversal and turns
+the wall speed (at once, or through a per-step half cosine).
 
 One controller per process. It runs inside a PyRunner at the sampling interval:
 writes one CSV row, checks the guards, prints progress and, every
@@ -31,7 +37,7 @@ import measure
 import scene as scenemod
 
 O = Omega()
-PREVIOUS = {"preshear": "pack", "heaviside": "preshear", "sinusoidal": "preshear"}
+PREVIOUS = {"preshear": "pack"}  # every reversal stage (heaviside, sinusoidal, a schedule) starts from the pre-shear
 
 
 class GuardError(RuntimeError):
@@ -173,6 +179,7 @@ class Stage:
         smp = sc["sampling"]
         st = dict(stage=self.stage, rows=0, samples_p=[], sum_p=0.0, sum_gd=0.0, n_acc=0, wall_time=0.0,
                   window=[], pack_ok=0)
+        self.st = st
         steps_per_strain = 1.0 / (der["gammadot"] * der["dt"])
         st["fine_every"] = max(1, int(round(smp["fine_interval"] * steps_per_strain)))
         st["coarse_every"] = max(st["fine_every"], int(round(smp["coarse_interval"] * steps_per_strain)))
@@ -192,9 +199,10 @@ class Stage:
             st["n_steps"] = int(math.ceil(sc["pack"]["max_time"] * der["T0"] / der["dt"]))
             st["fine_end"] = 0
         else:
-            prev = os.path.join(self.case_dir, f"{PREVIOUS[self.stage]}.final.yade.gz")
+            before = PREVIOUS.get(self.stage, "preshear")
+            prev = os.path.join(self.case_dir, f"{before}.final.yade.gz")
             if not os.path.exists(prev):
-                raise InputError(f"missing input {prev}: run stage {PREVIOUS[self.stage]} first")
+                raise InputError(f"missing input {prev}: run stage {before} first")
             O.load(prev)
             self.lay = build.layout()
             pst = json.loads(O.tags["ys_state"])
@@ -206,26 +214,91 @@ class Stage:
                 st["t_origin"] = O.time
                 st["strain"] = 0.0
             st["strain_start"], st["t_start"] = st["strain"], (O.time - st["t_origin"]) / der["T0"]
-            strain_len = sc[self.stage]["strain"]
-            st["n_steps"] = int(math.ceil(strain_len * steps_per_strain))
             st["n_transition"] = 0
-            if self.stage == "sinusoidal":
-                st["n_transition"] = int(math.ceil(sc["sinusoidal"]["transition_strain"] * steps_per_strain))
-            st["fine_end"] = O.iter + st["n_transition"] + int(math.ceil(smp["fine_window"] * steps_per_strain))
-            st["every"] = st["fine_every"]
-            U = der["U"]
             if self.stage == "preshear":
-                build.set_wall_speeds(self.lay, U, -U)
-            elif self.stage == "heaviside":
-                build.set_wall_speeds(self.lay, -U, U)
+                st["n_steps"] = int(math.ceil(sc["preshear"]["strain"] * steps_per_strain))
+                st["fine_end"] = O.iter + int(math.ceil(smp["fine_window"] * steps_per_strain))
+                build.set_wall_speeds(self.lay, der["U"], -der["U"])
             else:
-                build.set_wall_speeds(self.lay, U, -U)  # the half cosine starts at +U
+                self._plan_schedule(steps_per_strain)
+            st["every"] = st["fine_every"]
         w = measure.walls(self.lay)
         st["x_rel"] = w["x_top"] - w["x_bot"]
         st["gap"] = w["y_top"] - w["y_bot"]
         st["last_sample_iter"] = -1
         st["scene_sha256"] = self.hash
         self.st = st
+
+    def _plan_schedule(self, steps_per_strain):
+        """The reversal stage's segments in steps (scene.segments), and the start of the first.
+
+        Segment k runs from step start_k = ceil(S_k * steps_per_strain) since the stage's start,
+        S_k the strain at full rate of the segments before it, to start_{k+1}; a segment whose
+        direction differs from the one before it (the pre-shear's, +1, for the first) starts
+        with a reversal: sharp (heaviside) or a half cosine of the wall speed over
+        ceil(transition_strain * steps_per_strain) steps.
+        """
+        st, smp = self.st, self.scene["sampling"]
+        segs, at, plan = scenemod.segments(self.scene, self.stage), 0.0, []
+        for seg in segs:
+            n_tr = (int(math.ceil(seg["transition_strain"] * steps_per_strain))
+                    if seg["transition"] == "half_cosine" else 0)
+            plan.append(dict(seg, start=int(math.ceil(at * steps_per_strain)), n_transition=n_tr))
+            at += seg["strain"]
+        st["segments"], st["segment"], st["direction"] = plan, -1, 1
+        st["n_steps"] = int(math.ceil(at * steps_per_strain))
+        st["fine_window_steps"] = int(math.ceil(smp["fine_window"] * steps_per_strain))
+        st["reversals"] = []
+        self._enter_segment(0, at_start=True)
+
+    def _next_boundary(self):
+        """Steps since the stage's start at which the next segment begins (None: in the last one)."""
+        st = self.st
+        k = st.get("segment", -1) + 1
+        if self.stage == "preshear" or self.stage == "pack" or k >= len(st["segments"]):
+            return None
+        return st["segments"][k]["start"]
+
+    def _enter_segment(self, k, at_start=False):
+        """Start segment k between two steps: a row for the state just before a reversal
+        (not at the stage's start: its contact forces are not saved with the state), the
+        new wall speeds (or the half cosine towards them), fine sampling from here on."""
+        st, der = self.st, self.der
+        seg = st["segments"][k]
+        reverses = seg["direction"] != st["direction"]
+        if reverses and not at_start:
+            self._sample()
+            if self.error is not None:
+                raise self.error
+        st["segment"] = k
+        if reverses:
+            st["reversals"].append(dict(strain=st["strain"], t=(O.time - st["t_origin"]) / der["T0"],
+                                        direction=seg["direction"], transition=seg["transition"],
+                                        **({"transition_strain": seg["transition_strain"]}
+                                           if seg["transition"] == "half_cosine" else {})))
+            st["tr_iter0"], st["tr_from"] = O.iter, st["direction"]
+            st["n_transition"] = seg["n_transition"]
+            st["fine_end"] = O.iter + seg["n_transition"] + st["fine_window_steps"]
+        st["direction"] = seg["direction"]
+        U, d0 = der["U"], st.get("tr_from", 1)
+        if reverses and seg["n_transition"] > 0:
+            build.set_wall_speeds(self.lay, d0 * U, -d0 * U)  # the half cosine starts at the old speed
+        else:
+            build.set_wall_speeds(self.lay, seg["direction"] * U, -seg["direction"] * U)
+        if not at_start and reverses:
+            if seg["n_transition"] > 0:
+                self._install_wall_runner(seg["n_transition"] + 1)
+            sampler = self.sampler
+            sampler.iterPeriod = st["fine_every"]
+            sampler.iterLast = st["last_sample_iter"] - 1  # the fine grid starts at the reversal
+            sampler.nDone = max(1, sampler.nDone)
+
+    def _install_wall_runner(self, n):
+        """A per-step PyRunner setting the wall speed for the next n steps, inserted before the sampler."""
+        eng = [e for e in O.engines if e.label != "wallspeed"]
+        k = next(i for i, e in enumerate(eng) if e.label in ("flip", "sampler"))
+        O.engines = eng[:k] + [engines.PyRunner(command="_ys_wall()", iterPeriod=1, nDo=n, label="wallspeed")] + eng[k:]
+        self.engine_names = engines.describe(O.engines)
 
     def _install_engines(self):
         st = self.st
@@ -236,8 +309,8 @@ class Stage:
         if self.stage != "pack" and st["last_sample_iter"] >= st["fine_end"]:
             every = st["coarse_every"]
         remaining_transition = 0
-        if self.stage == "sinusoidal":
-            remaining_transition = max(0, st["iter0"] + st["n_transition"] + 1 - O.iter)
+        if st.get("n_transition", 0) > 0:  # inside (or past) the current segment's half cosine
+            remaining_transition = max(0, st["tr_iter0"] + st["n_transition"] + 1 - O.iter)
         # the pack's own Cundall damping, restored to effects.damping in the saved packing (finish)
         damping = self._pack_damping() if self.stage == "pack" else None
         O.engines = engines.build(self.scene, every, "_ys_sample()",
@@ -254,11 +327,19 @@ class Stage:
 
     # ------------------------------------------------------------ per sample
     def wall_speed(self):
-        """Half cosine from +U to -U over the transition, then -U (sinusoidal only)."""
+        r"""Half cosine of the top wall speed from a U to b U over the transition, then b U.
+
+        .. math:: u(x) = U\left[\tfrac12(a + b) + \tfrac12(a - b)\cos\pi x\right],\quad
+                  x = \min(1, k / n_{tr})
+
+        a, b the directions before and after the reversal, k the steps since its start
+        (a = 1, b = -1: U cos(pi x), the sinusoidal protocol).
+        """
         st = self.st
-        k = O.iter + 1 - st["iter0"]
+        k = O.iter + 1 - st["tr_iter0"]
         x = min(1.0, k / st["n_transition"])
-        u = self.der["U"] * math.cos(math.pi * x)
+        a, b = st["tr_from"], st["direction"]
+        u = self.der["U"] * (0.5 * (a + b) + 0.5 * (a - b) * math.cos(math.pi * x))
         build.set_wall_speeds(self.lay, u, -u)
 
     def sample(self):
@@ -489,10 +570,16 @@ class Stage:
             if SIGNALS:
                 self.interrupt()
             n = min(remaining, chunk)
+            boundary = self._next_boundary()
+            if boundary is not None:
+                n = min(n, boundary - (O.iter - st["iter0"]))
             i0, w0 = O.iter, time.time()
-            O.run(n, True)
+            if n > 0:
+                O.run(n, True)
             if self.error is not None:
                 raise self.error
+            if boundary is not None and O.iter - st["iter0"] >= boundary:
+                self._enter_segment(st["segment"] + 1)
             elapsed = time.time() - w0
             if O.iter > i0:
                 chunk = max(1, min(10 * chunk, int((O.iter - i0) * CHUNK_S / max(elapsed, 1e-3))))
@@ -501,7 +588,7 @@ class Stage:
             if self.want_checkpoint and not self.done:
                 self.want_checkpoint = False
                 self.checkpoint()
-            if O.iter - i0 < n and not self.done:
+            if O.iter - i0 < n and not self.done and n > 0:
                 raise RuntimeError(f"the run stopped early at iteration {O.iter}")
         if self.stage == "pack" and not self.done:
             raise GuardError(f"packing not converged within pack.max_time = {self.scene['pack']['max_time']:g} "
@@ -589,6 +676,11 @@ class Stage:
                        gap_mean=st.get("sum_gap", math.nan) / n_p)
             if self.stage in ("heaviside", "sinusoidal"):
                 out.update(reversal_strain=st["strain_start"], reversal_t=st["t_start"])
+            elif self.stage != "preshear":   # a schedule: every reversal, the first also as reversal_strain, _t
+                out.update(reversal_strain=st["reversals"][0]["strain"], reversal_t=st["reversals"][0]["t"],
+                           reversals=st["reversals"], segments=[
+                               {k: v for k, v in seg.items() if k not in ("start", "n_transition")}
+                               for seg in st["segments"]])
             if self.stage == "sinusoidal":
                 out["transition_steps"] = st["n_transition"]
         return out

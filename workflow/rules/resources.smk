@@ -47,7 +47,12 @@ def dem_seconds(scene, stage):
         steps = _grid.PACK_TIME * math.sqrt(4 * mat["kappa"] / math.pi) / dt_over_tc
     else:
         steps = _grid.steps_per_strain(mat["kappa"], scene["loading"]["inertial_number"], dt_over_tc)
-        steps *= scene[stage]["strain"]
+        if stage in scene:
+            steps *= scene[stage]["strain"]
+        else:   # a reversal schedule: the sum of its segments' strains (campaign.preflight)
+            from campaign.preflight import protocol_strain
+
+            steps *= protocol_strain(stage, scene["schedules"][stage])
     return n * steps / _grid.throughput(n)
 
 

@@ -51,8 +51,9 @@ def case_row(label: str, case: dict, case_dir: Path, stages: list[str]) -> dict:
 
 
 def main(snakemake):
+    order = ["pack", "preshear", "heaviside", "sinusoidal"]   # then the reversal schedules, by name
     stages = sorted({Path(p).stem for p in snakemake.input.sidecars},
-                    key=["pack", "preshear", "heaviside", "sinusoidal"].index)
+                    key=lambda s: (order.index(s) if s in order else len(order), s))
     rows = [
         case_row(label, case, Path(snakemake.input.series[i]).parent, stages)
         for i, (label, case) in enumerate(snakemake.params.cases.items())
