@@ -222,6 +222,40 @@ def test_pack_converges_through_its_phases(case):
     assert r["ke"][-1] < side["scene"]["pack"]["ke_max"]
 
 
+def _packing_cost_module():
+    import importlib.util
+    spec = importlib.util.spec_from_file_location("packing_cost", ROOT / "workflow" / "scripts" / "packing_cost.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_packing_cost_is_the_pack_share_of_the_case_sidecars(case, tmp_path):
+    pc = _packing_cost_module()
+    stages = ["pack", "preshear", "heaviside", "sinusoidal"]
+    side = {s: json.loads((case["dir"] / f"{s}.json").read_text()) for s in stages}
+    # a second case: the same sidecars with a pack twice as long
+    other = tmp_path / "other"
+    other.mkdir()
+    for s in stages:
+        d = dict(side[s])
+        if s == "pack":
+            d.update(cpu_time_s=2 * d["cpu_time_s"], steps=2 * d["steps"])
+        (other / f"{s}.json").write_text(json.dumps(d))
+    row = pc.packing_cost("tiny", [case["dir"], other], stages).iloc[0]
+    cpu = sum(side[s]["cpu_time_s"] for s in stages)
+    f1 = side["pack"]["cpu_time_s"] / cpu
+    f2 = 2 * side["pack"]["cpu_time_s"] / (cpu + side["pack"]["cpu_time_s"])
+    assert row["n_cases"] == 2 and row["campaign"] == "tiny"
+    assert row["pack_cpu_fraction_mean"] == pytest.approx((f1 + f2) / 2)
+    assert row["pack_cpu_fraction_max"] == pytest.approx(f2)
+    assert row["pack_steps_max"] == 2 * side["pack"]["steps"]
+    assert row["case_cpu_s_mean"] == pytest.approx(cpu + side["pack"]["cpu_time_s"] / 2)
+    (other / "heaviside.json").write_text(json.dumps({"steps": 1}))
+    with pytest.raises(pc.DEMInputError, match="heaviside.json.*cpu_time_s"):
+        pc.packing_cost("tiny", [case["dir"], other], stages)
+
+
 def test_same_seed_same_packing(tmp_path):
     sc = make_scene()
     sc["geometry"].update(H_over_d=5, W_over_H=2)

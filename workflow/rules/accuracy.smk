@@ -1,5 +1,6 @@
-# What accuracy costs in time: the ODE work-precision study of the continuum
-# model (always on: seconds) and the DEM resolution study (config accuracy.dem_study).
+# What accuracy costs in time: the packing's share of the DEM campaign (always on:
+# reads the sidecars), the ODE work-precision study of the continuum model (always
+# on: seconds) and the DEM resolution study (config accuracy.dem_study).
 
 
 rule ode_work_precision:
@@ -72,6 +73,33 @@ rule calibration_cost:
     shell:
         "OMP_NUM_THREADS=1 {PY} -m calibrate.cost_benchmark --results {RESULTS} --out {RESULTS}/accuracy"
         " {params.protocol_sets} > {log} 2>&1"
+
+
+rule packing_cost:
+    input:
+        sidecars=[
+            f"{case_dir(label)}/{stage}.json"
+            for label in CASES
+            for stage in ["pack", "preshear", *PROTOCOLS]
+        ],
+    output:
+        report(
+            f"{RESULTS}/accuracy/packing_cost.csv",
+            caption="../report/packing_cost.rst",
+            category="Accuracy and cost",
+        ),
+    params:
+        campaign=config["campaign"],
+    resources:
+        runtime=COST_SMALL.runtime,
+        mem_mb=COST_SMALL.mem_mb,
+    log:
+        f"{RESULTS}/logs/accuracy/packing_cost.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/accuracy/packing_cost.tsv"
+    threads: 1
+    script:
+        "../scripts/packing_cost.py"
 
 
 # --- DEM resolution study ------------------------------------------------------
@@ -250,7 +278,7 @@ rule dem_study:
 
 
 def accuracy_targets():
-    targets = []
+    targets = list(rules.packing_cost.output)  # always on: reads the campaign's sidecars
     if ACCURACY.get("ode_work_precision", True):
         targets += rules.ode_work_precision.output
     if ACCURACY.get("batched_cost", True):
