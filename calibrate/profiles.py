@@ -30,7 +30,8 @@ serial correlation of the residuals (lag-1 autocorrelation :math:`\rho`,
 AR(1), ``io._ar1_variance_inflation``). Its ends are interpolated linearly
 between grid points. An end that no grid point crosses is open: the interval
 reaches the edge of the grid (``-inf``/``inf``) or the parameter's bound (the
-bound's value, "at bound"). A parameter is *identified* when both ends are
+bound's value; also for a grid that stops short of a finite bound, as Model 1's
+log grids of c1 and c2 stop short of 0). A parameter is *identified* when both ends are
 finite crossings strictly inside its bounds.
 
 Grids: X_c from its lower bound (``fits.xc_lower_bound``) to ``fits.XC_MAX``;
@@ -202,8 +203,13 @@ def interval(prof: pd.DataFrame, lower: float = -math.inf, upper: float = math.i
     def end(i, j, bound, side):
         if j < 0 or j >= len(v):   # no crossing on this side of the grid
             at_bound = np.isfinite(bound) and abs(v[i] - bound) <= 1e-6 * max(abs(bound), 1.0)
-            notes.append(f"{side} end open: {'reaches the bound ' + format(bound, '.4g') if at_bound else 'beyond the grid'}")
-            return (bound if at_bound else (-math.inf if side == "lower" else math.inf)), False
+            if at_bound:
+                notes.append(f"{side} end open: reaches the bound {bound:.4g}")
+            elif np.isfinite(bound):   # a grid short of a finite bound (Model 1's c1, c2 on a log grid)
+                notes.append(f"{side} end open: beyond the grid, towards the bound {bound:.4g}")
+            else:
+                notes.append(f"{side} end open: beyond the grid")
+            return (bound if np.isfinite(bound) else (-math.inf if side == "lower" else math.inf)), False
         if not np.isfinite(d[j]):   # the neighbour cannot be integrated: the model, not the data, ends it
             notes.append(f"{side} end at {v[j]:.4g}, where no re-fit can be integrated (the pole, not the data)")
             return float(v[j]), False

@@ -45,6 +45,8 @@ def test_a_flat_profile_is_open_and_not_identified():
     assert not iv["identified"] and iv["low"] == 0.1 and iv["high"] == 0.5 and "reaches the bound" in iv["note"]
     iv = profiles.interval(parabola(v, 0.3, 1.0, 4.0))
     assert iv["low"] == -math.inf and iv["high"] == math.inf and "beyond the grid" in iv["note"]
+    iv = profiles.interval(parabola(v, 0.3, 1.0, 4.0), lower=0.0)   # a log grid short of its bound 0
+    assert iv["low"] == 0.0 and "towards the bound 0" in iv["note"] and not iv["identified"]
 
 
 def test_a_profile_ended_by_failed_refits_is_not_identified():
