@@ -153,3 +153,14 @@ def test_reported_intervals_cover_the_truth_in_80_to_100_percent_of_20_realisati
     _, summ = run_coverage(20)
     for key in CHECKED:
         assert 0.8 <= summ.loc[key, "coverage"] <= 1.0, summ
+
+
+@pytest.mark.parametrize("option", [["--profile-points", "1"], ["--profile-points", "-3"], ["--profile-evals", "0"]])
+def test_command_line_rejects_a_profile_grid_that_cannot_make_an_interval(tmp_path, option):
+    import subprocess
+    import sys
+    from pathlib import Path
+    r = subprocess.run([sys.executable, "-m", "calibrate", "--dem", str(tmp_path / "absent"), "--out",
+                        str(tmp_path / "cal"), *option], cwd=Path(__file__).parents[1], capture_output=True,
+                       text=True, timeout=60)
+    assert r.returncode == 2 and "--profile-points" in r.stderr and "Traceback" not in r.stderr
