@@ -29,8 +29,8 @@ Verdict
 -------
 A parameter is *identified* when its profile interval (``profiles``) is
 finite and inside its bounds; without a profile (a parameter not profiled),
-when its bootstrap interval is inside its bounds and it carries less than
-half of the worst direction's weight while that direction is rank-deficient.
+when its bootstrap interval is inside its bounds and less than half of its
+unit vector lies in the undetermined directions (``undetermined_weight``).
 """
 from __future__ import annotations
 
@@ -131,8 +131,23 @@ def direction(v, names, floor: float = 0.1) -> str:
     return " ".join(f"{v[i]:+.2f} {names[i]}" for i in order if abs(v[i]) >= floor)
 
 
+def undetermined_weight(svd: pd.DataFrame, name: str) -> float:
+    r"""Length of a parameter's unit vector projected on the undetermined directions: :math:`\sqrt{\sum_k v_{kj}^2}`
+    over the :math:`v_k` below the threshold (0: every direction it enters is determined; 1: none is)."""
+    col = f"v_{name}"
+    if col not in svd.columns:
+        return math.nan
+    low = svd[~svd["above_threshold"].astype(bool)]
+    return float(np.sqrt(np.sum(low[col].to_numpy(float) ** 2)))
+
+
 def verdict(model: str, fitted: dict, boot: dict, prof: pd.DataFrame, svd: pd.DataFrame, bounds: dict) -> pd.DataFrame:
     """One row per parameter of the block: estimate, intervals, identified yes/no and why.
+
+    A profiled parameter is identified when its profile interval is finite and
+    inside its bounds (``profiles.interval``); a parameter not profiled, when its
+    bootstrap interval lies inside its bounds and less than half of its unit
+    vector lies in the undetermined directions (``undetermined_weight`` < 0.5).
 
     Parameters
     ----------
@@ -148,13 +163,12 @@ def verdict(model: str, fitted: dict, boot: dict, prof: pd.DataFrame, svd: pd.Da
         name -> (low, high): the search bounds.
     """
     worst = svd.iloc[-1]
-    deficient = not bool(worst["above_threshold"])
     rows = []
     for name, value in fitted.items():
         b_lo, b_hi = boot.get(name, (math.nan, math.nan))
         p = prof[prof["parameter"] == name] if len(prof) else prof
         lo, hi = bounds.get(name, (-math.inf, math.inf))
-        weight = abs(float(worst.get(f"v_{name}", math.nan)))
+        weight = undetermined_weight(svd, name)
         notes = []
         if len(p):
             p = p.iloc[0]
@@ -163,13 +177,13 @@ def verdict(model: str, fitted: dict, boot: dict, prof: pd.DataFrame, svd: pd.Da
             notes.append("profile: " + ("finite, inside the bounds" if ident else p["note"]))
         else:
             p_lo = p_hi = math.nan
-            inside = np.isfinite(b_lo) and np.isfinite(b_hi) and lo < b_lo and b_hi < hi
-            ident = bool(inside and not (deficient and weight >= 0.5))
-            notes.append("not profiled: judged by the bootstrap interval and the sensitivity matrix")
-        if deficient and weight >= 0.5:
-            notes.append(f"carries {weight:.2f} of the worst-determined direction ({worst['direction']}; "
-                         f"relative singular value {worst['relative']:.2g} below {worst['threshold']:g})")
+            inside = bool(np.isfinite(b_lo) and np.isfinite(b_hi) and lo < b_lo and b_hi < hi)
+            ident = inside and not weight >= 0.5
+            notes.append("not profiled: bootstrap interval " + ("inside" if inside else "not inside") + " the bounds")
+        if weight >= 0.5:
+            notes.append(f"{weight:.2f} of it lies in the undetermined directions (the worst: {worst['direction']}, "
+                         f"relative singular value {worst['relative']:.2g} below {worst['threshold']:.2g})")
         rows.append({"model": model, "parameter": name, "estimate": value, "bootstrap_low": b_lo,
                      "bootstrap_high": b_hi, "profile_low": p_lo, "profile_high": p_hi,
-                     "identified": "yes" if ident else "no", "note": "; ".join(notes)})
+                     "identified": "yes" if ident else "no", "undetermined_weight": weight, "note": "; ".join(notes)})
     return pd.DataFrame(rows)

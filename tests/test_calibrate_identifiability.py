@@ -164,3 +164,18 @@ def test_command_line_rejects_a_profile_grid_that_cannot_make_an_interval(tmp_pa
                         str(tmp_path / "cal"), *option], cwd=Path(__file__).parents[1], capture_output=True,
                        text=True, timeout=60)
     assert r.returncode == 2 and "--profile-points" in r.stderr and "Traceback" not in r.stderr
+
+
+def test_a_parameter_inside_undetermined_directions_is_not_identified_without_a_profile():
+    rng = np.random.default_rng(0)
+    u = rng.standard_normal((500, 2))
+    S = np.column_stack([u[:, 0], u[:, 1], 2.0 * u[:, 1] + 1e-6 * rng.standard_normal(500)])
+    svd = identifiability.svd_table(S, ("c1", "c2", "c3"), "model2")
+    boot = {"c1": (-2.0, -1.0), "c2": (-30.0, -10.0), "c3": (-20.0, 10.0)}
+    bounds = {k: (-math.inf, math.inf) for k in boot}
+    v = identifiability.verdict("model2", {"c1": -1.5, "c2": -20.0, "c3": -5.0}, boot, pd.DataFrame(), svd,
+                                bounds).set_index("parameter")
+    assert v.loc["c1", "identified"] == "yes" and v.loc["c1", "undetermined_weight"] < 1e-3
+    # c3 = 2 c2 + noise: c2 carries 0.89 and c3 0.45 of the undetermined direction
+    assert v.loc["c2", "identified"] == "no" and v.loc["c2", "undetermined_weight"] == pytest.approx(0.894, abs=0.01)
+    assert v.loc["c3", "identified"] == "yes" and "undetermined" not in v.loc["c3", "note"]
