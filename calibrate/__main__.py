@@ -10,7 +10,7 @@ import re
 import sys
 from pathlib import Path
 
-from . import backsolve, freeform, io, route2, smoothing
+from . import backsolve, freeform, io, profiles, route2, smoothing
 from .pipeline import Settings, run
 
 PROTOCOL_NAME = re.compile(r"^[a-z][a-z0-9_]*$")
@@ -54,6 +54,12 @@ def parser() -> argparse.ArgumentParser:
     g.add_argument("--bootstrap", type=int, default=Settings.n_boot, help="bootstrap replicates over seeds")
     g.add_argument("--bootstrap-evals", type=int, default=Settings.boot_evals, help="model evaluations per replicate fit")
     g.add_argument("--seed", type=int, default=0, help="bootstrap random seed")
+    g = p.add_argument_group("identifiability (profiles of the route-2 objective)")
+    g.add_argument("--profile-points", type=int, default=profiles.ProfileSettings.n_points,
+                   help="grid points per profiled parameter (X_c and the c_i); 0: no profiles")
+    g.add_argument("--profile-evals", type=int, default=profiles.ProfileSettings.evals,
+                   help="model evaluations per profile point's re-fit")
+    g = p.add_argument_group("other")
     g.add_argument("--steady-weight", type=float, default=1.0)
     g.add_argument("--min-samples", type=int, default=io.MIN_SAMPLES, help="fewest rows accepted per DEM file")
     g.add_argument("--no-figures", action="store_true")
@@ -69,6 +75,10 @@ def parser() -> argparse.ArgumentParser:
 def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     a = parser().parse_args(argv)
+    if a.profile_points < 0 or a.profile_points == 1 or a.profile_evals < 1:
+        print(f"calibrate: --profile-points {a.profile_points} / --profile-evals {a.profile_evals}: expected "
+              f"0 (no profiles) or >= 2 points and >= 1 evaluation", file=sys.stderr)
+        return 2
     try:
         Path(a.out).mkdir(parents=True, exist_ok=True)  # before any work: a bad --out fails at once
         settings = Settings(
@@ -82,7 +92,8 @@ def main(argv=None) -> int:
                                          mu_weight=a.mu_weight, steady_weight=a.steady_weight),
             steady_weight=a.steady_weight, n_boot=a.bootstrap, boot_evals=a.bootstrap_evals, seed=a.seed,
             min_samples=a.min_samples, figures=not a.no_figures,
-            freeform=freeform.FreeformSettings(n_breaks=a.freeform_breaks) if a.freeform else None)
+            freeform=freeform.FreeformSettings(n_breaks=a.freeform_breaks) if a.freeform else None,
+            profile=profiles.ProfileSettings(n_points=a.profile_points, evals=a.profile_evals))
         run(a.dem, a.out, settings, log=lambda m: print(m, file=sys.stderr, flush=True),
             argv=["python -m calibrate", *argv])
     except io.DEMInputError as exc:

@@ -12,6 +12,12 @@ and writes
   loop's: ``n_outside_interval`` counts the fitted values (every route) of the batched
   table outside the loop table's bootstrap interval, ``max_shift_over_width`` is the
   largest |difference| over the interval's width;
+- the profiles' cost (``calibrate.profiles``), batched: ``xc_profile_cpu_s`` is the
+  profile of Model 1's X_c alone (``profile_points`` re-fits, after route 2;
+  target ``--profile-target`` seconds), ``with_profiles_cpu_s`` a whole calibration
+  with every profile (X_c and the c_i of both models) and the sensitivity
+  matrix, ``profiles_share`` the part of it they take (the loop and batched
+  columns above time the calibration without profiles, as before they existed);
 - ``calibration_cost_params.csv``: the two values of every parameter of every set,
   the loop's interval and the shift.
 
@@ -43,7 +49,7 @@ import pandas as pd
 
 from dem_contract.labels import parse_case_label
 
-from . import io, pipeline, route2, tables
+from . import io, pipeline, profiles, route2, tables
 
 SYNTHETIC_M1 = dict(a1=-0.85, b1=0.0, c1=-3000.0, a2=-5.0, b2=100.0, c2=2000.0, X_c=0.0827)
 QUICK_SHAPE = dict(inertial_numbers=(2e-3, 5e-3), seeds=(1, 2, 3), preshear_strain=1.5, reversal_strain=0.6,
@@ -100,11 +106,27 @@ def compare_tables(loop: pd.DataFrame, batched: pd.DataFrame) -> pd.DataFrame:
     return m
 
 
+def profile_cost(dirs, settings: pipeline.Settings, work: Path) -> tuple:
+    """CPU seconds of the X_c profile alone (``settings.profile.n_points`` re-fits, batched) and of a calibration
+    with every profile (``pipeline.run``, batched), in this process."""
+    s = replace(settings, route2=replace(settings.route2, integrator="batched"))
+    cases = pipeline.read_inputs(dirs, s)
+    samples, steady = pipeline.smooth(cases, s)
+    r1, doc1 = pipeline.fit_route1(samples, steady, pipeline.fit_friction(samples, steady, s), s)
+    replays, r2, _ = pipeline.fit_route2(cases, samples, steady, r1, doc1, s, lambda m: None)
+    c0 = time.process_time()
+    profiles.profile(replays, doc1, "model1", r2["model1"].values, steady, r1["sigma_mu"], s.route2, s.profile,
+                     names=("X_c",))
+    xc = time.process_time() - c0
+    return xc, _timed(dirs, work, s)[1]
+
+
 def run(case_dirs, data: str, out: Path, protocol_sets: dict, settings: pipeline.Settings, target: float,
-        work: Path, log=print):
+        work: Path, log=print, profile_target: float = 60.0):
     rows, params = [], []
     for name, (dirs, protocols) in calibration_sets(case_dirs, protocol_sets).items():
-        s = replace(settings, protocols=tuple(protocols), figures=False)
+        with_profiles = replace(settings, protocols=tuple(protocols), figures=False)
+        s = replace(with_profiles, profile=replace(settings.profile, n_points=0))   # the integrators compared alone
         times, tabs = {}, {}
         for integrator in route2.INTEGRATORS[::-1]:   # loop first, then batched
             o = work / name / integrator
@@ -113,12 +135,17 @@ def run(case_dirs, data: str, out: Path, protocol_sets: dict, settings: pipeline
             log(f"{name} {integrator}: {times[integrator][0]:.1f} s wall, {times[integrator][1]:.1f} s CPU")
         cmp = compare_tables(tabs["loop"], tabs["batched"])
         (lw, lc), (bw, bc) = times["loop"], times["batched"]
+        xc, pc = profile_cost(dirs, with_profiles, work / name / "profiles")
+        log(f"{name}: X_c profile {xc:.1f} s CPU; calibration with profiles {pc:.1f} s CPU")
         rows.append({"set": name, "data": data, "n_cases": len(dirs), "protocols": "+".join(protocols),
                      "n_boot": s.n_boot, "loop_wall_s": lw, "loop_cpu_s": lc, "batched_wall_s": bw,
                      "batched_cpu_s": bc, "speedup_wall": lw / bw, "speedup_cpu": lc / bc, "target_s": target,
                      "batched_meets_target": bool(bc <= target), "n_parameters": len(cmp),
                      "n_outside_interval": int((~cmp["inside_interval"]).sum()),
-                     "max_shift_over_width": float(cmp["shift_over_width"].max())})
+                     "max_shift_over_width": float(cmp["shift_over_width"].max()),
+                     "profile_points": with_profiles.profile.n_points, "xc_profile_cpu_s": xc,
+                     "xc_profile_target_s": profile_target, "xc_profile_meets_target": bool(xc <= profile_target),
+                     "with_profiles_cpu_s": pc, "profiles_share": 1.0 - bc / pc if pc > 0 else float("nan")})
         params.append(cmp.assign(set=name))
     cost = pd.DataFrame(rows)
     tables.write_csv(cost, out / "calibration_cost.csv")
@@ -136,6 +163,8 @@ def parser() -> argparse.ArgumentParser:
                    help="an extra set of every case with these protocols (e.g. heaviside_only=heaviside)")
     p.add_argument("--bootstrap", type=int, default=pipeline.Settings.n_boot, help="bootstrap replicates per set")
     p.add_argument("--target", type=float, default=10.0, help="target CPU seconds per set (batched)")
+    p.add_argument("--profile-target", type=float, default=60.0,
+                   help="target CPU seconds of the X_c profile per set (batched)")
     p.add_argument("--work", help="keep each calibration's outputs here (default: a temporary directory)")
     return p
 
@@ -151,8 +180,8 @@ def main(argv=None) -> int:
                   f"from {io.REVERSAL_PROTOCOLS}", file=sys.stderr)
             return 2
         protocol_sets[name] = protos
-    if a.bootstrap < 1 or a.target <= 0:
-        print("cost_benchmark: --bootstrap must be >= 1 and --target > 0", file=sys.stderr)
+    if a.bootstrap < 1 or a.target <= 0 or a.profile_target <= 0:
+        print("cost_benchmark: --bootstrap must be >= 1, --target and --profile-target > 0", file=sys.stderr)
         return 2
     dem = Path(a.results) / "dem"
     case_dirs = sorted(str(d) for d in dem.glob("*") if (d / "preshear.csv").is_file()) if dem.is_dir() else []
@@ -167,7 +196,7 @@ def main(argv=None) -> int:
         log(f"cost_benchmark: {len(case_dirs)} case(s), {data}")
         try:
             cost = run(case_dirs, data, Path(a.out), protocol_sets, pipeline.Settings(n_boot=a.bootstrap),
-                       a.target, work, log)
+                       a.target, work, log, a.profile_target)
         except io.DEMInputError as exc:
             print(f"cost_benchmark: bad DEM input: {exc}", file=sys.stderr)
             return 2

@@ -143,3 +143,50 @@ def fig_curves(replays, predictions: dict, path):
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
+
+
+def fig_profiles(prof, prof_iv, path):
+    """Each profiled parameter: objective minus its minimum against the parameter, with the interval's threshold.
+
+    One panel per (model, parameter) of ``prof`` (``profiles.profile``): the
+    re-fitted points (crosses where no re-fit could be integrated), the
+    threshold line of the 95 % profile interval and the interval's ends
+    (``prof_iv``, ``profiles.intervals``). Model 1's c1 and c2 span decades:
+    their axis is |value| on a log scale.
+    """
+    keys = list(dict.fromkeys(zip(prof["model"], prof["parameter"]))) if len(prof) else []
+    n = max(len(keys), 1)
+    ncol = min(3, n)
+    nrow = int(np.ceil(n / ncol))
+    fig, axes = plt.subplots(nrow, ncol, figsize=(4.2 * ncol, 3.2 * nrow), squeeze=False)
+    for ax in axes.flat[len(keys):]:
+        ax.axis("off")
+    if not keys:
+        axes[0, 0].text(0.5, 0.5, "no profiles (--profile-points 0)", ha="center", va="center")
+    for ax, (model, name) in zip(axes.flat, keys):
+        p = prof[(prof["model"] == model) & (prof["parameter"] == name)].sort_values("value")
+        logx = model == "model1" and name in ("c1", "c2")
+        x = np.abs(p["value"].to_numpy(float)) if logx else p["value"].to_numpy(float)
+        d = p["delta"].to_numpy(float)
+        thr = float(p["threshold"].iloc[0])
+        ok = np.isfinite(d)
+        ax.plot(x[ok], np.maximum(d[ok], thr * 1e-3), "o-", ms=3, color="tab:blue", label="re-fitted")
+        if (~ok).any():
+            ax.plot(x[~ok], np.full((~ok).sum(), thr), "x", color="tab:red", label="cannot be integrated")
+        ax.axhline(thr, color="k", ls="--", lw=1, label="95 % threshold")
+        iv = prof_iv[(prof_iv["model"] == model) & (prof_iv["parameter"] == name)]
+        if len(iv):
+            for end in (iv["low"].iloc[0], iv["high"].iloc[0]):
+                if np.isfinite(end):
+                    ax.axvline(abs(end) if logx else end, color="tab:green", lw=1)
+            ax.set_title(f"{model} {name}: {'identified' if iv['identified'].iloc[0] else 'not identified'}",
+                         fontsize=9)
+        ax.set_yscale("log")
+        if logx:
+            ax.set_xscale("log")
+        ax.set_xlabel(f"|{name}|" if logx else name)
+        ax.set_ylabel("objective - minimum")
+    axes.flat[0].legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
+    plt.close(fig)

@@ -13,7 +13,8 @@ import pandas as pd
 from dem_contract import fabric_angle_deg, fabric_norm
 from model import default_params, params_from_dict, steady_state
 
-from . import backsolve, bootstrap, figures, fits, freeform, io, route1, route2, smoothing, tables
+from . import (backsolve, bootstrap, figures, fits, freeform, identifiability, io, profiles, route1, route2,
+               smoothing, tables)
 
 BLOCKS = ("friction_eq2", "friction_quadratic", "model1", "model2")
 #: Fewest seeds per ensemble for bootstrap intervals worth the name; below it the calibration warns.
@@ -35,13 +36,15 @@ class Settings:
     min_samples: int = io.MIN_SAMPLES
     figures: bool = True
     freeform: freeform.FreeformSettings | None = None   # None: no free-form fit (step 5b)
+    profile: profiles.ProfileSettings = field(default_factory=profiles.ProfileSettings)
 
     def as_dict(self) -> dict:
         return {"protocols": list(self.protocols), "smoothing": self.smoothing.as_dict(),
                 "backsolve": self.backsolve.as_dict(), "route2": self.route2.as_dict(),
                 "steady_weight": self.steady_weight, "xc_margin": self.xc_margin, "n_boot": self.n_boot,
                 "boot_evals": self.boot_evals, "bootstrap_seed": self.seed, "min_samples": self.min_samples,
-                "freeform": self.freeform.as_dict() if self.freeform else None}
+                "freeform": self.freeform.as_dict() if self.freeform else None,
+                "profile": self.profile.as_dict()}
 
 
 def _route2_start(replays, doc, model, r1_values, steady, sigma_mu, s2, xc_margin):
@@ -209,6 +212,78 @@ def run_bootstrap(cases, samples, replays, r1, r2, doc1, settings: Settings, log
     return values, heldout, iv
 
 
+def identify(replays, r1, r2, doc1, steady, iv, settings: Settings, log):
+    """Step 6b, identifiability: profiles of X_c and the c_i, the sensitivity matrix's SVD, the verdict per parameter.
+
+    Returns
+    -------
+    prof : DataFrame
+        ``profiles.profile`` rows of both models (empty with ``profile.n_points = 0``).
+    prof_iv : DataFrame
+        ``profiles.intervals`` of ``prof``.
+    svd, verdict : DataFrame
+        ``identifiability.svd_table`` and ``identifiability.verdict`` of both models
+        (``sensitivity_svd.csv``, ``identifiability.csv``).
+    """
+    xl = fits.xc_lower_bound(steady, settings.xc_margin)
+    profs, svds, verdicts = [], [], []
+    for model in ("model1", "model2"):
+        c0 = time.process_time()
+        if settings.profile.n_points > 0 and model in settings.profile.models:
+            m = iv[(iv["route"] == "curves") & (iv["block"] == model)] if len(iv) else iv
+            widths = dict(zip(m["parameter"], m["high"] - m["low"])) if len(m) else {}
+            profs.append(profiles.profile(replays, doc1, model, r2[model].values, steady, r1["sigma_mu"],
+                                          settings.route2, settings.profile, x_lower=xl, widths=widths))
+            log(f"profiles {model}: {profiles.PROFILED[model]} x {settings.profile.n_points} points, "
+                f"{time.process_time() - c0:.1f} s CPU")
+        S, _, r0 = identifiability.sensitivity(replays, doc1, model, r2[model].values, r1["sigma_mu"],
+                                               settings.route2)
+        delta = profiles.threshold(r0, 0.5 * float(np.sum(r0**2)), S.shape[1], settings.profile.level)
+        svds.append(identifiability.svd_table(S, identifiability.KEYS[model], model, delta))
+    prof = pd.concat(profs, ignore_index=True) if profs else pd.DataFrame(columns=profiles.COLUMNS)
+    prof_iv = profiles.intervals(prof, xl) if len(prof) else pd.DataFrame(
+        columns=["model", "parameter", "low", "high", "identified", "note"])
+    for model, svd in zip(("model1", "model2"), svds):
+        m = iv[(iv["route"] == "curves") & (iv["block"] == model)] if len(iv) else iv
+        boot = {r["parameter"]: (r["low"], r["high"]) for _, r in m.iterrows()}
+        bounds = {k: profiles.bounds_of(model, k, xl) for k in identifiability.KEYS[model]}
+        verdicts.append(identifiability.verdict(model, r2[model].values, boot, prof_iv[prof_iv["model"] == model],
+                                                svd, bounds))
+    return prof, prof_iv, pd.concat(svds, ignore_index=True), pd.concat(verdicts, ignore_index=True)
+
+
+def reported_intervals(iv, values, doc1, doc2, prof_iv, cases) -> pd.DataFrame:
+    """Step 6c, honest intervals: the bootstrap's widened to the t interval over seeds, joined with the profile's.
+
+    Every row's ``low``/``high`` is the union of the bootstrap percentile
+    interval and the t interval over the seeds of the smallest ensemble
+    (``bootstrap.t_widened``); for a profiled route-2 parameter also the
+    profile-likelihood interval (``profiles``). ``interval`` names what the row
+    reports; ``boot_low``/``boot_high`` keep the percentile interval.
+    """
+    counts = {}
+    for c in cases:
+        counts[c.group] = counts.get(c.group, 0) + 1
+    n = min(counts.values()) if counts else 0
+    est = {}
+    for route, doc in (("backsolve", doc1), ("curves", doc2)):
+        for block in BLOCKS:
+            for k, v in doc[block].items():
+                est[(route, block, k)] = v
+    out = bootstrap.t_widened(iv, values, est, n)
+    base = (f"bootstrap over seeds (percentile) joined with the t interval over {n} seeds" if n >= 2 else
+            "bootstrap over seeds (percentile; one seed: no t widening)")
+    out["interval"] = base
+    for _, p in prof_iv.iterrows():
+        m = (out["route"] == "curves") & (out["block"] == p["model"]) & (out["parameter"] == p["parameter"])
+        if not m.any() or np.isnan(p["low"]) or np.isnan(p["high"]):
+            continue
+        out.loc[m, "low"] = np.fmin(out.loc[m, "low"], p["low"])
+        out.loc[m, "high"] = np.fmax(out.loc[m, "high"], p["high"])
+        out.loc[m, "interval"] = base + " and the profile-likelihood interval"
+    return out
+
+
 def score_routes(replays, heldout, r1, r2, doc1, doc2, settings: Settings):
     """Step 7a: in-sample and held-out scores of both routes of each model, and each model's default route.
 
@@ -374,7 +449,7 @@ def parameter_table(doc1, doc2, iv, default_route, xc_bound) -> pd.DataFrame:
               ("backsolve", "model2"): doc1["model2"], ("curves", "model2"): doc2["model2"]}
     bounds = {(route, block, name): b for (block, name), b in fits.SIGN_BOUNDS.items()
               for route in ("mu_vs_X", "backsolve", "curves")}
-    bounds.update({(route, "model1", "X_c"): (xb, np.inf) for route, xb in xc_bound.items()})
+    bounds.update({(route, "model1", "X_c"): (xb, fits.XC_MAX) for route, xb in xc_bound.items()})
     return tables.params_table(fitted, iv, default_route, bounds)
 
 
@@ -382,6 +457,8 @@ def default_intervals(ptab) -> dict:
     """Step 8b: the intervals of the default rows, as params.yaml's ``intervals`` block."""
     intervals = {}
     for _, row in ptab[ptab["default"]].iterrows():
+        if not (np.isfinite(row["low"]) and np.isfinite(row["high"])):
+            continue   # an interval open to infinity: the data do not bound it (identifiability.csv)
         intervals.setdefault(row["block"], {})[row["parameter"]] = [float(row["low"]), float(row["high"])]
     return intervals
 
@@ -397,7 +474,9 @@ def provenance(cases, default_route, steady, settings: Settings, argv) -> dict:
         "seeds": [c.seed for c in cases],
         "default_route": default_route,
         "routes": dict(tables.ROUTE_NAMES),
-        "intervals": f"bootstrap over seeds, {settings.n_boot} replicates, 2.5-97.5 percentiles",
+        "intervals": f"bootstrap over seeds, {settings.n_boot} replicates, 2.5-97.5 percentiles, joined with the "
+                     f"t interval over seeds and, for route 2's profiled parameters, the profile-likelihood "
+                     f"interval (params_table.csv, column 'interval'); only finite intervals are listed",
         "dem_steady_state": steady,
         "settings": settings.as_dict(),
         "synthetic_input": any(c.preshear.meta.get("synthetic") for c in cases),
@@ -413,6 +492,13 @@ def write_tables(out: Path, final, ptab, btab, quality, heldout, values) -> None
     if len(heldout):  # a failed replicate: NaN scores, the reason in 'failure'
         tables.write_csv(heldout.replace([np.inf, -np.inf], np.nan), out / "heldout_scores.csv")
     tables.write_csv(values, out / "bootstrap_values.csv")
+
+
+def write_identifiability(out: Path, prof, svd, verdict) -> None:
+    """Step 9b: profiles.csv, sensitivity_svd.csv and identifiability.csv under ``out``."""
+    tables.write_csv(prof, out / "profiles.csv")
+    tables.write_csv(svd, out / "sensitivity_svd.csv")
+    tables.write_csv(verdict, out / "identifiability.csv")
 
 
 def write_figures(out: Path, samples, replays, btab, doc1, doc2, final, default_route, settings: Settings,
@@ -459,6 +545,9 @@ def run(case_dirs, out, settings: Settings = Settings(), log=print, argv=None) -
     free = fit_freeform(replays, doc2, steady, r1, out, settings, log)
     values, heldout, iv = run_bootstrap(cases, samples, replays, r1, r2, doc1, settings, log)
     log(f"bootstrap done ({time.time() - t0:.1f} s)")
+    prof, prof_iv, svd, verdict = identify(replays, r1, r2, doc1, steady, iv, settings, log)
+    log(f"identifiability done ({time.time() - t0:.1f} s)")
+    iv = reported_intervals(iv, values, doc1, doc2, prof_iv, cases)
     quality, default_route = score_routes(replays, heldout, r1, r2, doc1, doc2, settings)
     final = final_document(doc1, doc2, default_route)
     xc_bound = xc_lower_bounds(r1, steady, settings)
@@ -471,9 +560,12 @@ def run(case_dirs, out, settings: Settings = Settings(), log=print, argv=None) -
     final["provenance"] = provenance(cases, default_route, steady, settings, argv)
     btab = tables.bins_table(r1["bins"], iv)
     write_tables(out, final, ptab, btab, quality, heldout, values)
+    write_identifiability(out, prof, svd, verdict)
     if settings.figures:
         write_figures(out, samples, replays, btab, doc1, doc2, final, default_route, settings, log, free)
+        figures.fig_profiles(prof, prof_iv, out / "fig_profiles.png")
     log(f"wrote {out} ({time.time() - t0:.1f} s); default routes: {default_route}")
     return {"default_route": default_route, "params": final, "route1": r1, "route2": r2, "intervals": iv,
             "quality": pd.DataFrame(quality), "steady": steady, "steady_check": steady_check(final),
+            "profiles": prof, "profile_intervals": prof_iv, "svd": svd, "identifiability": verdict,
             "elapsed": time.time() - t0}

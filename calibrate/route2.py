@@ -406,7 +406,8 @@ def _scaled_bounds(model, steady, settings: Route2Settings, x_lower):
     return fits.M2_KEYS, np.array([1.0, 1.0, 10.0]), np.full(3, -np.inf), np.full(3, np.inf)
 
 
-def _objective(replays, base_params, model, keys, scale, steady, sigma_mu, settings: Route2Settings, n_res):
+def _objective(replays, base_params, model, keys, scale, steady, sigma_mu, settings: Route2Settings, n_res,
+               fixed=None):
     """The residual function of ``fit``, its ``workers`` map, and the state they keep.
 
     A trial set that cannot be integrated (pole, divergence, no steady state)
@@ -415,6 +416,7 @@ def _objective(replays, base_params, model, keys, scale, steady, sigma_mu, setti
     finite-difference points with: with the batched integrator it integrates all
     of them in one batch first, then calls ``fun`` on each point in scipy's order,
     so the counting, the budget and the best point are those of one call per point.
+    ``fixed`` (name -> value) holds parameters of the block out of ``keys`` at those values.
 
     Returns
     -------
@@ -424,6 +426,8 @@ def _objective(replays, base_params, model, keys, scale, steady, sigma_mu, setti
     """
     friction = "eq2" if model == "model1" else "quadratic"
     alpha = fits.alpha_model1 if model == "model1" else fits.alpha_model2
+    order = fits.M1_KEYS if model == "model1" else fits.M2_KEYS
+    fixed = dict(fixed or {})
     state = {"n": 0, "best": None, "best_cost": np.inf, "fails": 0}
     ready = {}   # point (bytes) -> residuals computed by the last batch (None: failed)
 
@@ -431,7 +435,7 @@ def _objective(replays, base_params, model, keys, scale, steady, sigma_mu, setti
         """Residuals of each scaled point, or None where it cannot be integrated (one batch for all)."""
         out, trials = [None] * len(points), []
         for k, p in enumerate(points):
-            vals = dict(zip(keys, (np.asarray(p) * scale).tolist()))
+            vals = {**fixed, **dict(zip(keys, (np.asarray(p) * scale).tolist()))}
             try:
                 trials.append((k, vals, _with_block(base_params, model, vals)))
             except FAILURES:
@@ -442,7 +446,7 @@ def _objective(replays, base_params, model, keys, scale, steady, sigma_mu, setti
                 if isinstance(c, Exception):
                     raise c
                 r = _residual_vector(c, replays, sigma_mu, settings)
-                s1, s2 = alpha(steady["X"], *[vals[key] for key in keys])
+                s1, s2 = alpha(steady["X"], *[vals[key] for key in order])
                 r = np.concatenate([r, fits._steady_fabric_residuals(s1, s2, steady, settings.steady_weight)])
                 if not np.all(np.isfinite(r)):
                     raise ValueError("non-finite residuals")
@@ -476,7 +480,7 @@ def _objective(replays, base_params, model, keys, scale, steady, sigma_mu, setti
 
 
 def fit(replays, base_params: dict, model: str, start: dict, steady: dict, sigma_mu: float,
-        settings: Route2Settings = Route2Settings(), x_lower=None) -> FitResult:
+        settings: Route2Settings = Route2Settings(), x_lower=None, fixed=None) -> FitResult:
     """Least-squares fit of the ``model`` block to the replays, from ``start``.
 
     Parameters
@@ -492,10 +496,17 @@ def fit(replays, base_params: dict, model: str, start: dict, steady: dict, sigma
     sigma_mu : float
     x_lower : float, optional
         Lower bound of X_c (Model 1); default ``fits.xc_lower_bound(steady, xc_margin)``.
+    fixed : dict, optional
+        Parameters of the block held at these values (not fitted; a profile's point,
+        ``calibrate.profiles``); they are part of the returned values.
     """
     keys, scale, lo, hi = _scaled_bounds(model, steady, settings, x_lower)
+    fixed = dict(fixed or {})
+    free = np.array([k not in fixed for k in keys])
+    keys, scale, lo, hi = tuple(k for k in keys if k not in fixed), scale[free], lo[free], hi[free]
     n_res = sum(3 * len(r.s) for r in replays) + fits.N_STEADY
-    res, workers, state = _objective(replays, base_params, model, keys, scale, steady, sigma_mu, settings, n_res)
+    res, workers, state = _objective(replays, base_params, model, keys, scale, steady, sigma_mu, settings, n_res,
+                                     fixed)
     x0 = np.array([start[k] for k in keys]) / scale
     with np.errstate(invalid="ignore"):
         x0 = np.clip(x0, np.where(np.isfinite(lo), lo + 1e-9 * np.abs(lo) + 1e-12, lo),
@@ -508,7 +519,8 @@ def fit(replays, base_params: dict, model: str, start: dict, steady: dict, sigma
     except _Budget:
         message = f"budget of {settings.max_evals} model evaluations used up; best point kept"
     p = state["best"] if state["best"] is not None else x0
-    vals = dict(zip(keys, (p * scale).tolist()))
+    vals = {**fixed, **dict(zip(keys, (p * scale).tolist()))}
+    vals = {k: vals[k] for k in (fits.M1_KEYS if model == "model1" else fits.M2_KEYS)}
     n_data = n_res - fits.N_STEADY
     rms = float(np.sqrt(2 * state["best_cost"] / max(n_res, 1)))
     ok = state["best_cost"] < 0.5 * n_res * PENALTY**2

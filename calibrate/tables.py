@@ -22,14 +22,16 @@ def _note(value, lo, hi, bounds) -> str:
             notes.append(f"at its {side} bound {b:.6g} (the constraint, not the data, sets it)")
     tol = 1e-6 * max(abs(lo), abs(hi)) if np.isfinite(lo) and np.isfinite(hi) else 0.0
     if np.isfinite(lo) and np.isfinite(hi) and not lo - tol <= value <= hi + tol:
-        notes.append("outside its bootstrap interval (replicates do not scatter about it: poorly identified)")
+        notes.append("outside its interval (replicates do not scatter about it: poorly identified)")
     return "; ".join(notes)
 
 
 def params_table(fitted: dict, iv: pd.DataFrame, default_route: dict, bounds: dict | None = None) -> pd.DataFrame:
-    """Rows (block, parameter, value, low, high, route, default, note).
+    """Rows (block, parameter, value, low, high, route, default, note[, boot_low, boot_high, interval]).
 
-    ``fitted`` maps (route, block) -> values dict; ``iv`` is ``bootstrap.intervals``;
+    ``fitted`` maps (route, block) -> values dict; ``iv`` is ``bootstrap.intervals`` (or, with the
+    columns ``boot_low``, ``boot_high`` and ``interval`` carried over, ``pipeline.reported_intervals``:
+    the reported interval is clipped to the fit's bounds);
     ``default_route`` maps block -> the route written to params.yaml; ``bounds``
     maps (route, block, parameter) -> (low, high), the fit's constraints, which
     ``note`` reports when a value sits on one.
@@ -41,9 +43,14 @@ def params_table(fitted: dict, iv: pd.DataFrame, default_route: dict, bounds: di
         for name, v in vals.items():
             m = iv[(iv["route"] == iv_route) & (iv["block"] == block) & (iv["parameter"] == name)]
             lo, hi = (float(m["low"].iloc[0]), float(m["high"].iloc[0])) if len(m) else (np.nan, np.nan)
+            b = bounds.get((route, block, name), (-np.inf, np.inf))
+            if len(m) and "boot_low" in m.columns:   # the widening stops at a bound (the percentile interval does not)
+                lo = min(max(lo, b[0]), float(m["boot_low"].iloc[0]))
+                hi = max(min(hi, b[1]), float(m["boot_high"].iloc[0]))
+            extra = {c: (m[c].iloc[0] if len(m) else (np.nan if c != "interval" else ""))
+                     for c in ("boot_low", "boot_high", "interval") if c in iv.columns}
             rows.append({"block": block, "parameter": name, "value": v, "low": lo, "high": hi, "route": route,
-                         "default": default_route.get(block) == route,
-                         "note": _note(v, lo, hi, bounds.get((route, block, name), (-np.inf, np.inf)))})
+                         "default": default_route.get(block) == route, "note": _note(v, lo, hi, b), **extra})
     return pd.DataFrame(rows)
 
 

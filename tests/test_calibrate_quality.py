@@ -4,6 +4,7 @@ import pandas as pd
 import pytest
 
 from calibrate import pipeline, synthetic
+from calibrate.profiles import ProfileSettings
 from model import default_params
 
 
@@ -45,7 +46,9 @@ def test_seed_warning_below_three_seeds(seeds, warned):
 def test_one_seed_calibration_warns_in_log_and_table_and_writes_no_inf(tmp_path):
     dirs = synthetic.write_ensemble(tmp_path / "dem", default_params(), seeds=(1,))
     log = []
-    pipeline.run(dirs, tmp_path / "cal", pipeline.Settings(n_boot=2, boot_evals=10, figures=False), log=log.append)
+    pipeline.run(dirs, tmp_path / "cal", pipeline.Settings(n_boot=2, boot_evals=10, figures=False,
+                                                           profile=ProfileSettings(n_points=4, evals=10)),
+                 log=log.append)
     assert any(m.startswith("warning: bootstrap intervals rest on fewer than 3 seeds") for m in log)
     q = pd.read_csv(tmp_path / "cal" / "fit_quality.csv")
     assert q["warning"].str.contains("p1_I0.001 \\(1 seed\\)").all()

@@ -25,8 +25,11 @@ from dem_contract import angle_difference, fabric_angle_deg, fabric_norm
 from calibrate.io import read_cases
 from calibrate.smoothing import smooth_cases
 from calibrate.backsolve import BacksolveSettings
+from calibrate.profiles import ProfileSettings
 from model import default_params, load_params, params_from_dict, steady_state
 
+#: Coarser profiles than the default (20 points), to keep the fixture's cost down.
+PROFILE = ProfileSettings(n_points=8, evals=30)
 TRUTH_M1 = dict(a1=-0.85, b1=0.0, c1=-3000.0, a2=-5.0, b2=100.0, c2=2000.0, X_c=0.0827)
 
 
@@ -44,7 +47,8 @@ def rel(x, y):
 def dem_noise_run(tmp_path_factory):
     root = tmp_path_factory.mktemp("rt")
     dirs = synthetic.write_ensemble(root / "dem", truth_params(), seeds=(1, 2, 3, 4))
-    res = pipeline.run(dirs, root / "cal", pipeline.Settings(n_boot=4, boot_evals=30), log=lambda m: None)
+    res = pipeline.run(dirs, root / "cal", pipeline.Settings(n_boot=4, boot_evals=30, profile=PROFILE),
+                       log=lambda m: None)
     return dirs, root / "cal", res
 
 
@@ -98,6 +102,24 @@ def test_outputs_hold_values_intervals_and_provenance(dem_noise_run):
     assert q["warning"].isna().all()        # 4 seeds: intervals worth the name
     assert not np.isinf(q.select_dtypes("number").to_numpy()).any()
     assert np.nanmax(q.filter(regex="_score$").to_numpy()) < 1e6   # no failure penalty posing as a score
+
+
+def test_identifiability_says_X_c_and_the_c_i_are_not_determined_by_500_disk_noise(dem_noise_run):
+    import pandas as pd
+    _, out, _ = dem_noise_run
+    ident = pd.read_csv(out / "identifiability.csv").set_index(["model", "parameter"])
+    assert ident.loc[("model1", "X_c"), "identified"] == "no"   # X_c sits on its lower bound (module Notes)
+    assert ident.loc[("model1", "a1"), "identified"] == "yes"
+    svd = pd.read_csv(out / "sensitivity_svd.csv")
+    m1, m2 = svd[svd["model"] == "model1"], svd[svd["model"] == "model2"]
+    assert len(m1) == 7 and m1["effective_rank"].iloc[0] < 7 and len(m2) == 3
+    prof = pd.read_csv(out / "profiles.csv")
+    assert set(prof["parameter"][prof["model"] == "model1"]) == {"c1", "c2", "X_c"}
+    assert (out / "fig_profiles.png").stat().st_size > 0
+    tab = pd.read_csv(out / "params_table.csv")
+    curves = tab[(tab["route"] == "curves") & (tab["block"] == "model1")]
+    assert curves["interval"].str.contains("profile-likelihood").sum() == 3
+    assert ((tab["low"] <= tab["boot_low"]) & (tab["high"] >= tab["boot_high"])).all()   # widened, never narrowed
 
 
 @pytest.mark.slow

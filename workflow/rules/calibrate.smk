@@ -14,11 +14,18 @@ CALIBRATION_FIGURES = [
 ]
 CALIBRATION_TABLES = ["params_table", "backsolve_alpha_vs_X", "fit_quality"]
 # Also written by python -m calibrate (calibrate/pipeline.py), not in the report:
-# the bootstrap replicates, their held-out scores, and the fitted curves on the DEM.
+# the bootstrap replicates, their held-out scores, the fitted curves on the DEM,
+# and what the data determine (calibrate/profiles.py, calibrate/identifiability.py):
+# the route-2 objective profiled over X_c and the c_i, its figure, the sensitivity
+# matrix's singular values, and the verdict per parameter.
 CALIBRATION_EXTRA = {
     "bootstrap": "bootstrap_values.csv",
     "heldout": "heldout_scores.csv",
     "curves": "fig_curves_model_vs_dem.png",
+    "profiles": "profiles.csv",
+    "profile_figure": "fig_profiles.png",
+    "svd": "sensitivity_svd.csv",
+    "identifiability": "identifiability.csv",
 }
 # calibration.freeform: the free-form alpha1(X), alpha2(X) fit (calibrate/freeform.py), its table
 # beside the others and its curves on Figs. 3a, 3b.
