@@ -47,10 +47,12 @@ REPEAT_PREFIX = "repeat:"
 THROUGHPUT_500 = 2.3e6
 THROUGHPUT_5000 = 0.8e6
 THROUGHPUT = ((500, THROUGHPUT_500), (5000, THROUGHPUT_5000))
-# Pack: simulated time to converge, in d*sqrt(rho/p): 665 on a 211-disk cell at
-# kappa = 1e3 (yade_scripts/examples/tiny.json, 237k steps at dt = 0.1 t_c, 28 s);
-# assumed the same for every setting. It costs steps like any other time.
-PACK_TIME = 665.0
+# Pack: simulated time to converge, in d*sqrt(rho/p), with the damped, quenched
+# packing (docs/scene.md "Packing"), measured 2026-11-23 at kappa = 1e3, dt = 0.1 t_c,
+# ke_max 1e-4: 44-61 for 2,000 disks (wall and periodic cells), 89-99 for the
+# 5,010-disk paper cell (the old undamped packing: 293 at 496 disks, 665 at 211).
+# The largest is assumed for every setting. It costs steps like any other time.
+PACK_TIME = 100.0
 
 
 def fmt(x: float) -> str:

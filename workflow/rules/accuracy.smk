@@ -111,10 +111,9 @@ rule packing_cost:
 # Cost of the default subset of config/config.yaml, estimated from the measured
 # throughput (dem_study/grid.py THROUGHPUT: 2.3 M particle-steps/s at 500 disks,
 # 0.8 M at 5,000, one thread), steps per unit strain sqrt(4 kappa/pi)/(I dt_over_tc)
-# over 1.9 strain, plus a pack of 665 time units (measured): 16 DEM cases, about
-# 1.7 core-hours, about 0.85 h on 2 cores (the H = 37 d point alone about 48 min);
-# with the 3 repeated kappa = 1e5 seeds 19 cases, 2.5 core-hours, 1.3 h on 2 cores
-# (measured: 36 min + 13 min). The full grid: 28 cases, about 2.3 core-hours.
+# over 1.9 strain, plus a pack of grid.PACK_TIME time units: with the 3 repeated
+# kappa = 1e5 seeds 19 DEM cases, about 1.4 core-hours (measured with the former,
+# undamped packing, several times longer: 36 min + 13 min on 2 cores).
 # `python -m dem_study estimate --configfile config/config.yaml [--subset full]`
 # prints the estimate per point.
 from dem_study import grid as dem_grid
