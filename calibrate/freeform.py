@@ -138,9 +138,6 @@ def fit_spline(replays, doc: dict, start: AlphaSpline, steady: dict, sigma_mu: f
     prm = params_from_dict(doc)
     K = spline_size(start.breaks)
     n_res = sum(3 * len(r.s) for r in replays) + fits.N_STEADY + 2 * len(roughness_matrix(start.breaks))
-    state = {"n": 0, "fails": 0, "best": None, "best_cost": np.inf}
-    ready = {}
-
     def unpack(p):
         return AlphaSpline(start.breaks, p[:K], p[K:])
 
@@ -159,26 +156,7 @@ def fit_spline(replays, doc: dict, start: AlphaSpline, steady: dict, sigma_mu: f
             out.append(r if np.all(np.isfinite(r)) else None)
         return out
 
-    def res(p):
-        if state["n"] >= max_evals:
-            raise route2._Budget
-        state["n"] += 1
-        key = np.asarray(p, dtype=float).tobytes()
-        r = ready.pop(key) if key in ready else evaluate([p])[0]
-        if r is None:
-            state["fails"] += 1
-            r = np.full(n_res, route2.PENALTY)
-        cost = 0.5 * float(r @ r)
-        if cost < state["best_cost"]:
-            state["best_cost"], state["best"] = cost, np.array(p, dtype=float)
-        return r
-
-    def workers(fun, points):
-        points = [np.array(x, dtype=float) for x in points]
-        ready.clear()
-        ready.update(zip((x.tobytes() for x in points), evaluate(points)))
-        return [fun(x) for x in points]
-
+    res, workers, state = route2.counted_objective(evaluate, n_res, max_evals)
     x0 = np.concatenate([start.c1, start.c2])
     message = ""
     try:

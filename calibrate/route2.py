@@ -406,30 +406,62 @@ def _scaled_bounds(model, steady, settings: Route2Settings, x_lower):
     return fits.M2_KEYS, np.array([1.0, 1.0, 10.0]), np.full(3, -np.inf), np.full(3, np.inf)
 
 
-def _objective(replays, base_params, model, keys, scale, steady, sigma_mu, settings: Route2Settings, n_res,
-               fixed=None):
-    """The residual function of ``fit``, its ``workers`` map, and the state they keep.
+def counted_objective(evaluate, n_res: int, max_evals: int, batched: bool = True):
+    """``least_squares``' residual function over ``evaluate``, its ``workers`` map, and the state they keep.
 
-    A trial set that cannot be integrated (pole, divergence, no steady state)
-    gets ``PENALTY`` in every residual; past ``max_evals`` evaluations it raises ``_Budget``.
-    ``workers(fun, xs)`` is the map ``least_squares`` evaluates the Jacobian's
-    finite-difference points with: with the batched integrator it integrates all
-    of them in one batch first, then calls ``fun`` on each point in scipy's order,
-    so the counting, the budget and the best point are those of one call per point.
-    ``fixed`` (name -> value) holds parameters of the block out of ``keys`` at those values.
+    ``evaluate(points)`` returns the residual vector of each (scaled) point, or None
+    where it cannot be integrated; such a point gets ``PENALTY`` in every one of its
+    ``n_res`` residuals. Past ``max_evals`` evaluations ``res`` raises ``_Budget``.
+    With ``batched``, ``workers(fun, xs)`` (the map ``least_squares`` evaluates the
+    Jacobian's finite-difference points with) evaluates all points in one call first,
+    then calls ``fun`` on each in scipy's order, so the counting, the budget and the
+    best point are those of one call per point. Shared by route 2 and ``calibrate.freeform``.
 
     Returns
     -------
     res, workers : callable
     state : dict
-        ``n`` (evaluations), ``fails``, ``best`` (scaled point) and ``best_cost``.
+        ``n`` (evaluations), ``fails``, ``best`` (scaled point) and ``best_cost`` (half the sum of squares).
+    """
+    state = {"n": 0, "best": None, "best_cost": np.inf, "fails": 0}
+    ready = {}   # point (bytes) -> residuals computed by the last batch (None: failed)
+
+    def res(p):
+        if state["n"] >= max_evals:
+            raise _Budget
+        state["n"] += 1
+        key = np.asarray(p, dtype=float).tobytes()
+        r = ready.pop(key) if key in ready else evaluate([p])[0]
+        if r is None:
+            state["fails"] += 1
+            r = np.full(n_res, PENALTY)
+        cost = 0.5 * float(np.sum(r**2))
+        if cost < state["best_cost"]:
+            state["best_cost"], state["best"] = cost, np.array(p, dtype=float)
+        return r
+
+    def workers(fun, points):
+        points = [np.array(x, dtype=float) for x in points]
+        ready.clear()
+        if batched:
+            ready.update(zip((x.tobytes() for x in points), evaluate(points)))
+        return [fun(x) for x in points]
+
+    return res, workers, state
+
+
+def _objective(replays, base_params, model, keys, scale, steady, sigma_mu, settings: Route2Settings, n_res,
+               fixed=None):
+    """The residual function of ``fit``, its ``workers`` map, and the state they keep (``counted_objective``).
+
+    A trial set that cannot be integrated (pole, divergence, no steady state) is a failed
+    point; with the batched integrator the Jacobian's points are integrated in one batch.
+    ``fixed`` (name -> value) holds parameters of the block out of ``keys`` at those values.
     """
     friction = "eq2" if model == "model1" else "quadratic"
     alpha = fits.alpha_model1 if model == "model1" else fits.alpha_model2
     order = fits.M1_KEYS if model == "model1" else fits.M2_KEYS
     fixed = dict(fixed or {})
-    state = {"n": 0, "best": None, "best_cost": np.inf, "fails": 0}
-    ready = {}   # point (bytes) -> residuals computed by the last batch (None: failed)
 
     def evaluate(points):
         """Residuals of each scaled point, or None where it cannot be integrated (one batch for all)."""
@@ -455,28 +487,7 @@ def _objective(replays, base_params, model, keys, scale, steady, sigma_mu, setti
                 pass
         return out
 
-    def res(p):
-        if state["n"] >= settings.max_evals:
-            raise _Budget
-        state["n"] += 1
-        key = np.asarray(p, dtype=float).tobytes()
-        r = ready.pop(key) if key in ready else evaluate([p])[0]
-        if r is None:
-            state["fails"] += 1
-            r = np.full(n_res, PENALTY)
-        cost = 0.5 * float(np.sum(r**2))
-        if cost < state["best_cost"]:
-            state["best_cost"], state["best"] = cost, np.array(p, dtype=float)
-        return r
-
-    def workers(fun, points):
-        points = [np.array(x, dtype=float) for x in points]
-        ready.clear()
-        if settings.integrator == "batched":
-            ready.update(zip((x.tobytes() for x in points), evaluate(points)))
-        return [fun(x) for x in points]
-
-    return res, workers, state
+    return counted_objective(evaluate, n_res, settings.max_evals, batched=settings.integrator == "batched")
 
 
 def fit(replays, base_params: dict, model: str, start: dict, steady: dict, sigma_mu: float,

@@ -11,6 +11,7 @@ import pytest
 import yaml
 
 from dem_study import bulk_cells
+from tests.test_dem_study_workflow import counts
 
 ROOT = Path(__file__).resolve().parents[1]
 QUICK = yaml.safe_load((ROOT / "config" / "quick.yaml").read_text())
@@ -29,20 +30,12 @@ def two_cells(tmp_path):
 
 
 def dry_run(config, tmp_path, *targets):
+    """Snakemake's dry run of ``targets`` (before --quiet, whose choices would swallow them) on ``config``."""
     path = tmp_path / "config.yaml"
     path.write_text(yaml.safe_dump(config))
     return subprocess.run([sys.executable, "-m", "snakemake", "-n", *targets, "--quiet", "rules",
                            "--configfile", str(path)],
                           cwd=ROOT, capture_output=True, text=True, timeout=300)
-
-
-def counts(stdout):
-    out = {}
-    for line in stdout.splitlines():
-        parts = line.split()
-        if len(parts) == 2 and parts[1].isdigit():
-            out[parts[0]] = int(parts[1])
-    return out
 
 
 def test_two_cells_one_seed_plan_one_dem_case_per_cell(tmp_path):
