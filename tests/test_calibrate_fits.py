@@ -44,7 +44,7 @@ def test_parameter_table_notes_values_held_by_a_constraint_or_outside_their_inte
                               {("curves", "model1", "X_c"): (0.097, np.inf), ("curves", "model1", "c1"): (-np.inf, 0.0)})
     note = dict(zip(tab["parameter"], tab["note"]))
     assert "lower bound 0.097" in note["X_c"]
-    assert "outside its bootstrap interval" in note["c1"] and "bound" not in note["c1"]
+    assert "outside its interval" in note["c1"] and "bound" not in note["c1"]
     assert note["a1"] == ""
 
 

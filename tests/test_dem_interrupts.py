@@ -44,7 +44,14 @@ def new_case(packed, tmp_path, strain):
     return scene, cdir
 
 
+def _sigint_as_at_a_terminal():
+    """A stage started from a terminal gets Ctrl-C; pytest run as a background job of a
+    non-interactive shell passes SIGINT on ignored, which the stage rightly keeps ignoring."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def start(scene, cdir, **kw):
+    kw.setdefault("preexec_fn", _sigint_as_at_a_terminal)
     return subprocess.Popen(["yade", "-n", "-x", str(RUN), str(scene), "preshear", str(cdir)],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=ENV, **kw)
 
