@@ -210,19 +210,7 @@ def validate(raw, stage=None):
             src = raw[sec]
         if not isinstance(src, dict):
             raise SceneError(f"scene error: section '{sec}' must be a JSON object")
-        for k in src:
-            if k not in keys:
-                raise SceneError(f"scene error: unknown key '{sec}.{k}' (allowed: {', '.join(keys)})")
-        o = {}
-        for k, (spec, default) in keys.items():
-            name = f"{sec}.{k}"
-            if k in src:
-                o[k] = _check_value(name, spec, src[k])
-            elif default is REQUIRED:
-                raise SceneError(f"scene error: missing required key '{name}'")
-            else:
-                o[k] = default
-        out[sec] = o
+        out[sec] = _check_keys(sec, src, keys)
     if SCHEDULES in raw:  # (absent: the validated scene stays as it was before schedules existed)
         out[SCHEDULES] = _check_schedules(raw[SCHEDULES])
     if stage is not None and stage not in STAGES and stage not in out.get(SCHEDULES, {}):
