@@ -13,6 +13,15 @@ builds, per cell, the seed mean and its standard error of
 
 and sets every cell against each reference cell (the W = 4H wall cells).
 
+A cell with a reversal train (``bulk_cells.reversal_stage`` = ``train``) yields
+several transients per seed (``dem_contract.split_transients``); each is put in
+the frame of a reversal against the pre-shear (``analysis.transient_curves``
+with its direction: a reversal back along the pre-shear is mirrored, x -> -x),
+and a seed's curve is the mean of its transients. The seed stays the unit of
+every standard error (its transients share one packing); ``early_se_pooled_<q>``
+treats all transients of a cell as independent, and ``design_effect_<q>`` =
+(early_se / early_se_pooled)^2 says how far they are not (1: independent).
+
 Notes
 -----
 Standard error of a seed mean, n seeds: :math:`SE = s/\sqrt n` (theta_A on the
@@ -46,7 +55,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from dem_contract import DEMInputError, angle_difference, read_series, read_sidecar, steady_values
+from dem_contract import DEMInputError, angle_difference, read_series, read_sidecar, split_transients, steady_values
 
 from .analysis import StudyInputError, _mean_and_se, transient_curves
 from .bulk_cost import STAGES, case_cost
@@ -55,8 +64,8 @@ STEADY = ("mu", "A_norm", "theta_A_deg", "phi", "Z")
 TRANSIENT = ("mu", "A_norm", "theta_A_deg")
 INFORMATION = ("A_norm", "theta_A_deg")
 AXIAL = {"theta_A_deg"}
-COLUMNS = {"preshear": ("t", "strain", "A_xx", "A_xy", "mu", "phi", "Z"),
-           "heaviside": ("t", "strain", "A_xx", "A_xy", "mu")}
+COLUMNS = {"preshear": ("t", "strain", "gammadot", "A_xx", "A_xy", "mu", "phi", "Z"),
+           "reversal": ("t", "strain", "gammadot", "A_xx", "A_xy", "mu")}
 
 
 @dataclass
@@ -65,24 +74,39 @@ class CaseResult:
     steady: dict
     curves: pd.DataFrame
     cost: dict
+    transients: list = None     # each transient's curves (one for a single reversal)
 
 
-def load_case(case_dir, case: str, steady_window: float, edges: np.ndarray) -> CaseResult:
-    """One case: steady values, binned Heaviside transient and CPU cost (``bulk_cost.case_cost``)."""
+def load_case(case_dir, case: str, steady_window: float, edges: np.ndarray, stage: str = "heaviside") -> CaseResult:
+    """One case: steady values, binned transient (the mean of a train's transients) and CPU cost.
+
+    ``stage``: the case's reversal run, ``heaviside`` or ``train`` (``bulk_cells.reversal_stage``).
+    """
     case_dir = Path(case_dir)
     try:
-        cost = case_cost(case_dir)
-        rev_side = read_sidecar(case_dir / "heaviside.csv")
+        cost = case_cost(case_dir, (*STAGES[:2], stage))
+        rev_side = read_sidecar(case_dir / f"{stage}.csv")
         pre = read_series(case_dir / "preshear.csv", COLUMNS["preshear"], what=f"the pre-shear of {case}")
-        rev = read_series(case_dir / "heaviside.csv", COLUMNS["heaviside"], what=f"the heaviside run of {case}")
+        rev = read_series(case_dir / f"{stage}.csv", COLUMNS["reversal"], what=f"the {stage} run of {case}")
+        transients = split_transients(pre, rev, rev_side, what=str(case_dir / f"{stage}.csv"))
     except (DEMInputError, StudyInputError) as e:
         raise StudyInputError(f"{case}: missing or bad output: {e}") from None
     st = steady_values(pre, last_strain=steady_window)
     if st["n_samples"] < 2:
         raise StudyInputError(f"{case}: fewer than 2 samples in the last {steady_window:g} of pre-shear strain")
     steady = {"mu": st["mu"], "A_norm": st["A_norm"], "theta_A_deg": st["theta_A"], "phi": st["phi"], "Z": st["Z"]}
-    rev_strain = rev_side.get("reversal_strain", rev_side.get("strain_start"))
-    return CaseResult(case, steady, transient_curves(rev, rev_strain, edges), cost)
+    pre_sign = float(np.sign(np.median(pre["gammadot"])))
+    each = [transient_curves(tr.data, tr.strain0, edges, direction=tr.sign * pre_sign) for tr in transients]
+    return CaseResult(case, steady, each[0] if len(each) == 1 else _mean_of(each), cost, each)
+
+
+def _mean_of(curves: list) -> pd.DataFrame:
+    """Bin-wise mean of transient curves (theta_A on the circle of axial angles)."""
+    out = {"strain_since_reversal": curves[0]["strain_since_reversal"].to_numpy()}
+    for q in TRANSIENT:
+        stack = np.stack([c[q].to_numpy() for c in curves])
+        out[q] = np.array([_mean_and_se(stack[:, j], q in AXIAL)[0] for j in range(stack.shape[1])])
+    return pd.DataFrame(out)
 
 
 def mean_curves(results: list[CaseResult]) -> pd.DataFrame:
@@ -110,8 +134,11 @@ def cell_table(cases: pd.DataFrame, results: dict[str, CaseResult], early_strain
         hours = np.array([r.cost["core_hours"] for r in res])
         row["core_hours_per_seed"] = float(hours.mean())
         row["core_hours"] = float(hours.sum())
-        for stage in STAGES:   # the pack and pre-shear are what a reversal train would share
+        for stage in STAGES[:2]:   # the pack and pre-shear are what a reversal train shares
             row[f"core_hours_{stage}_per_seed"] = float(np.mean([r.cost[f"cpu_time_{stage}_s"] for r in res]) / 3600)
+        row["core_hours_reversal_per_seed"] = (row["core_hours_per_seed"] - row["core_hours_pack_per_seed"]
+                                               - row["core_hours_preshear_per_seed"])
+        row["transients"] = sum(len(r.transients) for r in res)
         for q in STEADY:
             row[q], row[f"{q}_se"] = _mean_and_se(np.array([r.steady[q] for r in res]), q in AXIAL)
         curves[cell] = c = mean_curves(res)
@@ -120,6 +147,10 @@ def cell_table(cases: pd.DataFrame, results: dict[str, CaseResult], early_strain
             se = float(np.sqrt(np.mean(np.square(c.loc[early, f"{q}_se"])))) if early.any() else np.nan
             row[f"early_se_{q}"] = se
             row[f"info_{q}"] = 1.0 / (se**2 * row["core_hours"]) if se > 0 else np.nan
+            pooled = mean_curves([CaseResult("", {}, c, {}) for r in res for c in r.transients])
+            se_p = float(np.sqrt(np.mean(np.square(pooled.loc[early, f"{q}_se"])))) if early.any() else np.nan
+            row[f"early_se_pooled_{q}"] = se_p
+            row[f"design_effect_{q}"] = (se / se_p) ** 2 if se_p > 0 else np.nan
         rows.append(row)
     return pd.DataFrame(rows), curves
 
@@ -186,7 +217,8 @@ def comparison(cells: pd.DataFrame, curves: dict, references, tall: str | None, 
 def analyse(cases: pd.DataFrame, bulk_dir, steady_window: float, edges: np.ndarray, early_strain: float,
             references, tall: str | None, match_se: float = 2.0):
     """Load every case of ``cases`` under ``bulk_dir``; returns (comparison table, cell table, curves)."""
-    results = {c: load_case(Path(bulk_dir) / c, c, steady_window, edges) for c in cases["case"]}
+    stages = cases["stage"] if "stage" in cases else ["heaviside"] * len(cases)
+    results = {c: load_case(Path(bulk_dir) / c, c, steady_window, edges, st) for c, st in zip(cases["case"], stages)}
     cells, curves = cell_table(cases, results, early_strain)
     return comparison(cells, curves, references, tall, match_se), cells, curves
 

@@ -2,8 +2,11 @@
 
 Config block ``accuracy.bulk_vs_walls`` (``workflow/schemas/config.schema.yaml``):
 named cells (``kind``, ``H_over_d``, ``W_over_H``), each run with every seed
-through pack -> preshear -> heaviside under
-``<results>/accuracy/bulk/<cell>_s<seed>/``. A case's scene is the campaign's
+(or the cell's own ``seeds``) through pack -> preshear -> heaviside under
+``<results>/accuracy/bulk/<cell>_s<seed>/``; a cell with ``train: {every,
+reversals}`` runs, in place of the one Heaviside reversal, a reversal train
+(stage ``train``: a Heaviside reversal every ``every`` strain, ``reversals``
+times, docs/scene.md) whose transients the analysis averages per seed. A case's scene is the campaign's
 (``campaign.scenes.scene_from_config``) with the cell, kappa, the inertial
 number and the study's strains changed; pressure, the rest of the material,
 the time step and the sampling stay the campaign's.
@@ -33,7 +36,8 @@ NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9-]*$")
 SEP = "_s"
 DEFAULTS = dict(heaviside_strain=0.3, preshear_strain=1.5, steady_window=1.0, transient_bin=0.01,
                 early_strain=0.1, match_se=2.0)
-CELL_KEYS = ("kind", "H_over_d", "W_over_H", "mass", "contact_law")
+CELL_KEYS = ("kind", "H_over_d", "W_over_H", "mass", "contact_law", "train", "seeds")
+TRAIN_STAGE = "train"
 PERIODIC_MAX_W_OVER_H = 1.1
 
 
@@ -44,6 +48,17 @@ def settings(config: dict) -> dict:
 
 def enabled(config: dict) -> bool:
     return bool(settings(config).get("run", False))
+
+
+def reversal_stage(spec: dict) -> str:
+    """The reversal stage a cell runs after its pre-shear: ``heaviside``, or ``train`` for a cell with a train."""
+    return TRAIN_STAGE if spec.get("train") else "heaviside"
+
+
+def reversal_strain(spec: dict, settings_: dict) -> float:
+    """Strain sheared after the pre-shear: the study's ``heaviside_strain``, or ``every`` x ``reversals``."""
+    train = spec.get("train")
+    return float(train["every"]) * int(train["reversals"]) if train else float(settings_["heaviside_strain"])
 
 
 def case_label(cell: str, seed: int) -> str:
@@ -74,7 +89,8 @@ def _disk_kwargs(config: dict) -> dict:
 
 
 def cases(config: dict) -> pd.DataFrame:
-    """One row per DEM case: ``case``, ``cell``, ``seed``, the cell's keys, ``N``, ``reference``, ``tall``.
+    """One row per DEM case: ``case``, ``cell``, ``seed``, the cell's keys, ``N``, ``reference``, ``tall``,
+    ``stage`` (``reversal_stage``) and ``reversals`` (transients the case yields).
 
     ``reference``: the cell is one of ``references`` (the W = 4H wall cells the
     others are compared with); ``tall``: the cell is ``tall_reference`` (the
@@ -85,11 +101,12 @@ def cases(config: dict) -> pd.DataFrame:
     rows = []
     for cell, spec in s["cells"].items():
         n = n_disks(spec.get("kind", "walls"), spec["H_over_d"], spec["W_over_H"], **_disk_kwargs(config))
-        for seed in s["seeds"]:
+        for seed in spec.get("seeds", s["seeds"]):
             rows.append(dict(case=case_label(cell, seed), cell=cell, seed=int(seed),
                              kind=spec.get("kind", "walls"), H_over_d=float(spec["H_over_d"]),
                              W_over_H=float(spec["W_over_H"]), W_over_d=float(spec["W_over_H"] * spec["H_over_d"]),
-                             N=n, reference=cell in refs, tall=cell == s.get("tall_reference")))
+                             N=n, reference=cell in refs, tall=cell == s.get("tall_reference"),
+                             stage=reversal_stage(spec), reversals=int((spec.get("train") or {}).get("reversals", 1))))
     return pd.DataFrame(rows)
 
 
@@ -106,6 +123,12 @@ def problems(config: dict) -> list[str]:
         if spec.get("kind", "walls") == "periodic" and spec["W_over_H"] > PERIODIC_MAX_W_OVER_H:
             out.append(f"config error: {key}.cells.{name}.W_over_H = {spec['W_over_H']:g}: too wide for a "
                        f"periodic cell (allowed: at most {PERIODIC_MAX_W_OVER_H})")
+        train = spec.get("train")
+        if train and float(train["every"]) < s["heaviside_strain"]:
+            out.append(f"config error: {key}.cells.{name}.train.every = {train['every']:g}: must be at least "
+                       f"{key}.heaviside_strain = {s['heaviside_strain']:g} (each transient is compared over it)")
+        if train and name in s.get("references", []):
+            out.append(f"config error: {key}.cells.{name}.train: a reference cell runs the one Heaviside reversal")
         if spec.get("kind", "walls") == "walls" and "mass" in spec:
             out.append(f"config error: {key}.cells.{name}.mass: a wall cell has no cell mass (periodic cells only)")
     for ref in s.get("references", []):
@@ -155,7 +178,12 @@ def case_config(config: dict, cell: str) -> dict:
         cfg["material"].pop("contact_law", None)   # the periodic cell's own (and only) law
     cfg["pack"] = {**cfg.get("pack", {}), **s.get("pack", {})}
     cfg["preshear"] = {**cfg.get("preshear", {}), "strain": float(s["preshear_strain"])}
-    cfg["protocols"] = {"heaviside": {"strain": float(s["heaviside_strain"])}}
+    train = spec.get("train")
+    if train:
+        cfg["protocols"] = {TRAIN_STAGE: {"train": {"every": float(train["every"]), "reversals": int(train["reversals"]),
+                                                    "transition": "heaviside"}}}
+    else:
+        cfg["protocols"] = {"heaviside": {"strain": float(s["heaviside_strain"])}}
     return cfg
 
 
@@ -175,14 +203,16 @@ def case_scene(config: dict, label: str) -> dict:
 def estimate(config: dict) -> pd.DataFrame:
     """Per case: disks, steps and estimated one-thread seconds (``grid``'s throughput and step counts).
 
-    seconds = N (PACK_TIME sqrt(4 kappa/pi)/dt_over_tc + steps_per_strain (preshear + heaviside strain)) / throughput(N)
+    seconds = N (PACK_TIME sqrt(4 kappa/pi)/dt_over_tc + steps_per_strain (preshear + reversal strain)) / throughput(N)
+
+    (the reversal strain: ``reversal_strain``, the train's for a cell with one).
     """
     s = settings(config)
     table = cases(config)
     dt = config["timestep"]["dt_over_tc"]
-    strain = s["preshear_strain"] + s["heaviside_strain"]
+    strain = s["preshear_strain"] + table["cell"].map(lambda c: reversal_strain(s["cells"][c], s))
     shear = grid.steps_per_strain(s["kappa"], s["inertial_number"], dt) * strain
     pack = grid.PACK_TIME * math.sqrt(4 * s["kappa"] / math.pi) / dt
     table["steps"] = shear + pack
-    table["est_core_s"] = [n * (shear + pack) / grid.throughput(n) for n in table["N"]]
+    table["est_core_s"] = table["N"] * table["steps"] / table["N"].map(grid.throughput)
     return table

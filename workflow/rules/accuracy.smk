@@ -399,10 +399,28 @@ use rule dem_reversal as bulk_study_heaviside with:
         f"{RESULTS}/benchmarks/accuracy/bulk/{{bulkcase}}/heaviside.tsv"
 
 
+# A cell with a reversal train runs it (stage `train`) in place of the Heaviside reversal.
+use rule bulk_study_heaviside as bulk_study_train with:
+    output:
+        state=f"{ACC_BULK}/{{bulkcase}}/train.final.yade.gz",
+        series=f"{ACC_BULK}/{{bulkcase}}/train.csv",
+        sidecar=f"{ACC_BULK}/{{bulkcase}}/train.json",
+    params:
+        stage="train",
+        case_dir=lambda wc: f"{ACC_BULK}/{wc.bulkcase}",
+    resources:
+        runtime=dem_runtime("train"),
+        mem_mb=dem_mem_mb,
+    log:
+        f"{RESULTS}/logs/accuracy/bulk/{{bulkcase}}/train.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/accuracy/bulk/{{bulkcase}}/train.tsv"
+
+
 BULK_RUNS = [
-    f"{ACC_BULK}/{case}/{name}"
-    for case in BULK_CASE_NAMES
-    for name in ["pack.json", "preshear.json", "preshear.csv", "heaviside.json", "heaviside.csv"]
+    f"{ACC_BULK}/{row.case}/{name}"
+    for row in (BULK_CASES.itertuples() if BULK_STUDY else [])
+    for name in ["pack.json", "preshear.json", "preshear.csv", f"{row.stage}.json", f"{row.stage}.csv"]
 ]
 
 
