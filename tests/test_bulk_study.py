@@ -36,17 +36,17 @@ def write_case(d: Path, N=500, dtheta=0.0, dA=0.0, ttheta=0.0, tA=0.0, cpu_s=(20
     d.mkdir(parents=True, exist_ok=True)
     s = np.arange(0, preshear_strain + 1e-12, 0.005)
     a, b = A_components(A0 + dA, THETA + dtheta)
-    cols = dict(t=s / 5e-3, strain=s, mu=MU, A_xx=a, A_xy=b, phi=PHI, Z=Z)
+    cols = dict(t=s / 5e-3, strain=s, gammadot=5e-3, mu=MU, A_xx=a, A_xy=b, phi=PHI, Z=Z)
     pd.DataFrame({k: np.broadcast_to(v, s.shape) for k, v in cols.items()}).to_csv(d / "preshear.csv", index=False)
     x = np.arange(fine, heaviside_strain + 1e-12, fine)
     mu, norm, theta = transient(x)
     a, b = A_components(norm + tA, theta + ttheta)
-    pd.DataFrame(dict(t=(preshear_strain + x) / 5e-3, strain=preshear_strain - x, mu=mu, A_xx=a,
+    pd.DataFrame(dict(t=(preshear_strain + x) / 5e-3, strain=preshear_strain - x, gammadot=-5e-3, mu=mu, A_xx=a,
                       A_xy=b)).to_csv(d / "heaviside.csv", index=False)
     for stage, cpu in zip(bulk_cost.STAGES, cpu_s):
         side = dict(N=N, cpu_time_s=cpu, wall_time_s=1.5 * cpu, strain_start=preshear_strain * (stage != "pack"))
         if stage == "heaviside":
-            side["reversal_strain"] = preshear_strain
+            side["reversal_strain"], side["reversal_t"] = preshear_strain, preshear_strain / 5e-3
         (d / f"{stage}.json").write_text(json.dumps(side))
 
 
@@ -89,7 +89,7 @@ def test_steady_values_are_seed_means_with_their_standard_error(study):
     assert ref["N"] == 5000 and ref["seeds"] == 3
     assert ref["core_hours_per_seed"] == pytest.approx(1800 / 3600)
     assert ref["core_hours"] == pytest.approx(3 * 1800 / 3600)
-    assert ref["core_hours_heaviside_per_seed"] == pytest.approx(300 / 3600)
+    assert ref["core_hours_reversal_per_seed"] == pytest.approx(300 / 3600)
 
 
 def test_a_cell_like_the_reference_matches_and_an_offset_one_is_named(study):
@@ -182,3 +182,66 @@ def test_a_reference_without_runs_is_named(study):
     root, *_ = study
     with pytest.raises(StudyInputError, match="W4H-H12"):
         bulk.analyse(cases_table(), root, 1.0, strain_edges(0.3, 0.01), 0.1, ["W4H-H12"], None)
+
+
+def write_train_case(d: Path, reversals: int, every=0.3, preshear_strain=1.5, fine=0.001, mirror=True,
+                     cpu_s=(60.0, 90.0, 300.0)):
+    """A case whose reversal run is a train: ``reversals`` reversals ``every`` strain apart, each
+    followed by ``transient``; a reversal back along the pre-shear (every second one) is its mirror
+    image (A_xy -> -A_xy), or, with ``mirror=False``, wrongly the same fabric."""
+    write_case(d, N=600, cpu_s=cpu_s[:2] + (0.0,), preshear_strain=preshear_strain)
+    (d / "heaviside.csv").unlink(), (d / "heaviside.json").unlink()
+    rows, marks = [], []
+    x = np.arange(fine, every + 1e-12, fine)
+    mu, norm, theta = transient(x)
+    a, b = A_components(norm, theta)
+    s0 = preshear_strain
+    for k in range(reversals):
+        sign = -1.0 if k % 2 == 0 else 1.0            # against the pre-shear, then back
+        t0 = (preshear_strain + k * every) / 5e-3
+        marks.append(dict(t=t0, strain=s0))
+        rows.append(pd.DataFrame(dict(t=t0 + x / 5e-3, strain=s0 + sign * x, gammadot=sign * 5e-3, mu=mu,
+                                      A_xx=a, A_xy=-sign * b if mirror else b)))
+        s0 += sign * every
+    pd.concat(rows).to_csv(d / "train.csv", index=False)
+    (d / "train.json").write_text(json.dumps(dict(N=600, cpu_time_s=cpu_s[2], wall_time_s=cpu_s[2],
+                                                  strain_start=preshear_strain, reversals=marks)))
+
+
+def train_study(root: Path, mirror=True):
+    for seed in SEEDS:
+        write_train_case(root / f"train_s{seed}", reversals=4, mirror=mirror)
+        write_case(root / f"ref_s{seed}", N=5000, cpu_s=(600.0, 900.0, 300.0),
+                   dtheta=float(SPREAD[seed - 1]), ttheta=float(SPREAD[seed - 1]), tA=0.01 * SPREAD[seed - 1])
+    cases = pd.DataFrame([dict(case=f"{c}_s{s}", cell=c, seed=s, kind="walls", H_over_d=37.0, W_over_d=18.5,
+                               stage=st) for c, st in (("ref", "heaviside"), ("train", "train")) for s in SEEDS])
+    return bulk.analyse(cases, root, 1.0, strain_edges(0.3, 0.01), 0.1, ["ref"], "ref")
+
+
+def test_a_train_gives_one_transient_per_reversal_each_mirrored_into_the_first_reversals_frame(tmp_path):
+    table, cells, curves = train_study(tmp_path)
+    row = cells.set_index("cell").loc["train"]
+    assert row["transients"] == 4 * len(SEEDS)
+    assert row["core_hours_per_seed"] == pytest.approx(450.0 / 3600)
+    c = curves["train"]
+    mu, norm, theta = transient(c["strain_since_reversal"].to_numpy())
+    # every transient, mirrored or not, is the made-up one: the bin means of the model curve
+    assert np.max(np.abs(c["A_norm"] - norm)) < 2e-3
+    assert np.max(np.abs(c["theta_A_deg"] - theta)) < 1.5
+    assert np.max(np.abs(c["mu"] - mu)) < 5e-3
+    assert bool(table.set_index("cell").loc["train", "match"]) is True
+
+
+def test_a_train_read_without_its_mirror_does_not_match_the_single_reversal(tmp_path):
+    _, cells, curves = train_study(tmp_path, mirror=False)
+    c = curves["train"]
+    _, _, theta = transient(c["strain_since_reversal"].to_numpy())
+    assert np.max(np.abs(c["theta_A_deg"] - theta)) > 10.0
+
+
+def test_design_effect_compares_the_seed_standard_error_with_the_pooled_transients(tmp_path):
+    _, cells, _ = train_study(tmp_path)
+    row = cells.set_index("cell").loc["ref"]
+    assert row["design_effect_A_norm"] == pytest.approx(1.0)    # one transient per seed: the same SE
+    train = cells.set_index("cell").loc["train"]
+    assert train["early_se_pooled_A_norm"] == pytest.approx(0.0, abs=1e-9)   # identical transients

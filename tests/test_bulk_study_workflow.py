@@ -66,14 +66,38 @@ def test_the_analysis_target_plans_the_dem_cases_and_no_campaign(tmp_path):
 def test_the_shipped_overlay_plans_every_cell_and_seed_and_nothing_of_the_campaign():
     """config/bulk_validation.yaml over config/quick.yaml, as its header says to run it."""
     overlay = yaml.safe_load((ROOT / "config" / "bulk_validation.yaml").read_text())["accuracy"]["bulk_vs_walls"]
-    n = len(overlay["cells"]) * len(overlay["seeds"])
+    seeds = {name: len(spec.get("seeds", overlay["seeds"])) for name, spec in overlay["cells"].items()}
+    n = sum(seeds.values())
+    n_train = sum(k for name, k in seeds.items() if "train" in overlay["cells"][name])
     result = subprocess.run([sys.executable, "-m", "snakemake", "-n", "bulk_vs_walls", "--quiet", "rules",
                              "--forceall", "--configfile", "config/quick.yaml", "config/bulk_validation.yaml"],
                             cwd=ROOT, capture_output=True, text=True, timeout=300)
     assert result.returncode == 0, result.stderr[-3000:]
     c = counts(result.stdout)
-    assert c.get("bulk_study_heaviside") == n and c.get("bulk_study_pack") == n and c.get("bulk_vs_walls") == 1
+    assert c.get("bulk_study_heaviside") == n - n_train and c.get("bulk_study_train") == n_train > 0
+    assert c.get("bulk_study_pack") == n and c.get("bulk_vs_walls") == 1
     assert not any(rule.startswith("dem_") for rule in c), c
+
+
+def test_a_train_cell_runs_its_train_with_its_own_seeds_in_place_of_the_heaviside_reversal(tmp_path):
+    config = two_cells(tmp_path)
+    config["accuracy"]["bulk_vs_walls"]["cells"]["periodic-N500"].update(train={"every": 0.3, "reversals": 4},
+                                                                         seeds=[7, 8])
+    result = dry_run(config, tmp_path, "bulk_study_dem")
+    assert result.returncode == 0, result.stderr[-3000:]
+    c = counts(result.stdout)
+    assert c.get("bulk_study_train") == 2 and c.get("bulk_study_heaviside") == 1 and c.get("bulk_study_pack") == 3
+    scene = bulk_cells.case_scene(config, "periodic-N500_s7")
+    assert scene["schedules"] == {"train": {"train": {"every": 0.3, "reversals": 4, "transition": "heaviside"}}}
+
+
+def test_a_train_shorter_than_the_compared_transient_is_stopped_naming_its_key(tmp_path):
+    config = two_cells(tmp_path)
+    config["accuracy"]["bulk_vs_walls"]["cells"]["periodic-N500"]["train"] = {"every": 0.2, "reversals": 4}
+    result = dry_run(config, tmp_path, "bulk_study_dem")
+    assert result.returncode == 2, result.stderr[-3000:]
+    assert "accuracy.bulk_vs_walls.cells.periodic-N500.train.every = 0.2" in result.stderr, result.stderr[-3000:]
+    assert "Traceback" not in result.stderr
 
 
 def test_study_off_plans_none_of_it(tmp_path):
@@ -137,7 +161,9 @@ def test_tiny_study_runs_end_to_end_through_snakemake(tmp_path):
     config["accuracy"] = dict(ode_work_precision=False, bulk_vs_walls=dict(
         run=True,
         cells={"walls-H8": dict(kind="walls", H_over_d=8, W_over_H=2),
-               "periodic-H10": dict(kind="periodic", H_over_d=10, W_over_H=1)},
+               "periodic-H10": dict(kind="periodic", H_over_d=10, W_over_H=1),
+               "walls-H8-train": dict(kind="walls", H_over_d=8, W_over_H=2, seeds=[3],
+                                      train={"every": 0.2, "reversals": 3})},
         references=["walls-H8"], tall_reference="walls-H8", seeds=[1, 2],
         kappa=1.0e3, inertial_number=1.0e-2, pack={"ke_max": 1.0e-4},
         preshear_strain=0.6, heaviside_strain=0.2, steady_window=0.3, early_strain=0.1))
@@ -155,7 +181,9 @@ def test_tiny_study_runs_end_to_end_through_snakemake(tmp_path):
     assert row["core_hours_per_seed"] > 0 and np.isfinite(row["info_ratio_A_norm"])
     assert (out / "bulk_vs_walls.png").stat().st_size > 10_000
     cost = pd.read_csv(out / "bulk_cost.csv")
-    assert len(cost) == 4 and (cost["cpu_time_s"] > 0).all()
+    assert len(cost) == 5 and (cost["cpu_time_s"] > 0).all()
+    train = table[table["cell"] == "walls-H8-train"].iloc[0]
+    assert train["transients"] == 3 and train["seeds"] == 1 and 0 < train["A_norm"] < 0.5
 
 
 def test_a_narrow_cell_below_the_scene_range_is_named_by_the_preflight(tmp_path):
@@ -174,7 +202,8 @@ def test_estimate_prints_the_cost_per_cell_of_the_shipped_overlay(capsys):
     out = capsys.readouterr().out
     overlay = yaml.safe_load((ROOT / "config" / "bulk_validation.yaml").read_text())["accuracy"]["bulk_vs_walls"]
     assert all(cell in out for cell in overlay["cells"])
-    assert f"{len(overlay['cells']) * len(overlay['seeds'])} DEM cases" in out and "core-hours" in out
+    n = sum(len(spec.get("seeds", overlay["seeds"])) for spec in overlay["cells"].values())
+    assert f"{n} DEM cases" in out and "core-hours" in out
 
 
 def test_estimate_without_the_block_exits_2_naming_it(capsys):
