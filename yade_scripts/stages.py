@@ -277,6 +277,9 @@ class Stage:
                                         **({"transition_strain": seg["transition_strain"]}
                                            if seg["transition"] == "half_cosine" else {})))
             st["tr_iter0"], st["tr_from"] = O.iter, st["direction"]
+            # the pressure guard's window restarts at each reversal, as at the stage's start: the
+            # wall pressure dips for a few percent of strain after every reversal, physically
+            st["window"], st["guard_from"] = [], (O.iter - st["iter0"]) * der["dt"] * der["gammadot"]
             st["n_transition"] = seg["n_transition"]
             st["fine_end"] = O.iter + seg["n_transition"] + st["fine_window_steps"]
         st["direction"] = seg["direction"]
@@ -512,7 +515,7 @@ class Stage:
             span = g["pressure_window_strain"]
             while win and win[0][0] < elapsed - span:
                 win.pop(0)
-            if elapsed >= span and len(win) >= 3:
+            if elapsed - st.get("guard_from", 0.0) >= span and len(win) >= 3:
                 pm = sum(x[1] for x in win) / len(win)
                 if abs(pm - 1) > g["pressure_tolerance"]:
                     raise GuardError(f"wall pressure {pm:.4f} p on average over the last {span:g} strain, "
