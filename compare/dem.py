@@ -185,13 +185,16 @@ def load_reversals(case_dir, protocol: str, a0_window: float = A0_WINDOW) -> lis
     return out
 
 
-def canonical(rev: Reversal, table: pd.DataFrame | None = None) -> pd.DataFrame | None:
+_DATA = object()   # canonical's default: the reversal's own data
+
+
+def canonical(rev: Reversal, table=_DATA) -> pd.DataFrame | None:
     """``rev``'s data (or a model's ``table`` on its samples) in the frame of the -1 reversals.
 
     A +1 reversal (back along the pre-shear) is reflected x -> -x
     (``dem_contract.derived.mirror_reversal``: A_xy, theta_A, strain, rate and shear stress
     change sign or turn to 180 - theta_A; |A|, mu and ``s_rev`` do not); a -1 one is
-    returned as it is (the same object).
+    returned as it is (the same object). A failed model's table (None) stays None.
     """
-    t = rev.data if table is None else table
+    t = rev.data if table is _DATA else table
     return mirror_reversal(t) if (t is not None and rev.direction > 0) else t
