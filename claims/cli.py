@@ -2,7 +2,7 @@ r"""Command line of the claims stage.
 
 ::
 
-    python -m claims --compare results/compare --dem results/dem/<case> ... \
+    python -m claims --compare results/compare --dem results/dem/<case> ... [--protocols heaviside sinusoidal ...] \
         [--calibration results/calibration/all/params.yaml] [--sets all heaviside_only ...] \
         [--resamples 2000] [--seed 0] [--preset paper=config/config.yaml ...] --out results/claims
         # -> paper_claims.csv, paper_claims.png, power.csv, README_section.md
@@ -17,7 +17,7 @@ import sys
 import time
 from pathlib import Path
 
-from dem_contract import DEMInputError
+from dem_contract import REVERSAL_PROTOCOLS, DEMInputError
 
 from . import inputs, power, report, table
 
@@ -26,6 +26,9 @@ def build_parser():
     ap = argparse.ArgumentParser(prog="python -m claims", description="The paper's claims as a table with verdicts.")
     ap.add_argument("--compare", required=True, help="the comparison folder results/compare (one sub-folder per set)")
     ap.add_argument("--dem", nargs="+", required=True, help="DEM case directories results/dem/<label>")
+    ap.add_argument("--protocols", nargs="+", default=list(REVERSAL_PROTOCOLS),
+                    help="the protocols' runs to read from each case: heaviside, sinusoidal and reversal schedules "
+                         "(every reversal of each, by its kind; default heaviside sinusoidal)")
     ap.add_argument("--calibration", default=None,
                     help="params.yaml whose Eq. 2 is checked against the collapse (default: <compare>/../calibration/all/params.yaml)")
     ap.add_argument("--freeform", default=None,
@@ -55,7 +58,7 @@ def main(argv=None) -> int:
         out = Path(args.out)
         out.mkdir(parents=True, exist_ok=True)
         pred = inputs.read_comparison(args.compare, args.sets)
-        dem_cases = [inputs.read_dem_case(d) for d in args.dem]
+        dem_cases = [inputs.read_dem_case(d, args.protocols) for d in args.dem]
         params = Path(args.calibration) if args.calibration else Path(args.compare).parent / "calibration" / "all" / "params.yaml"
         ff = inputs.read_freeform(args.freeform) if args.freeform else None
         tab = table.claims_table(pred, dem_cases, table.eq2_params(params), args.resamples, args.seed, ff)

@@ -6,8 +6,11 @@ r"""What the claims stage reads: the comparison's tables and the DEM series (thr
   (a run is out of sample when the set was not calibrated on its case or on its
   protocol).
 - ``read_dem_case``: one case's pre-shear steady state (``dem_contract.steady_values``;
-  theta_A mirrored to positive shear) and its reversal runs' samples for the
-  collapse of mu on X (``X = sqrt2 A_xy sign(gammadot)``, docs/model.md).
+  theta_A mirrored to positive shear) and the samples of every reversal of its
+  protocol runs (a schedule's too, each tagged with its kind) for the collapse
+  of mu on X (``X = sqrt2 A_xy sign(gammadot)``, docs/model.md).
+- Every curve of ``predictions.csv`` carries its reversal's ``kind`` (heaviside:
+  a step; sinusoidal: a half cosine); the claims group a seed's reversals by it.
 
 Bad or missing input raises ``DEMInputError`` naming the file (exit status 2 at
 the command line).
@@ -20,8 +23,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from dem_contract import (REVERSAL_PROTOCOLS, DEMInputError, pre_reversal_state, read_series, split_case_label,
-                          steady_values)
+from dem_contract import (REVERSAL_PROTOCOLS, DEMInputError, pre_reversal_state, read_series, read_sidecar,
+                          split_case_label, split_transients, steady_values)
+from dem_contract.derived import reversal_kinds
 
 PREDICTION_COLUMNS = ("set", "case", "group", "seed", "protocol", "source", "s_rev", "A_xx", "A_xy", "A_norm",
                       "theta_A", "mu")
@@ -74,6 +78,10 @@ def read_comparison(compare_dir, sets=None) -> pd.DataFrame:
                  .set_index(["case", "protocol"])["in_sample"].astype(bool))
         key = pd.MultiIndex.from_frame(pred[["case", "protocol"]])
         pred["in_sample"] = flags.reindex(key).fillna(True).to_numpy(bool)   # unknown: never scored out of sample
+        if "kind" not in pred:   # a comparison from before kinds: only the classic runs, named after their kind
+            kinds = {p: reversal_kinds({}, p, what=str(compare_dir / name / "predictions.csv"))[0]["kind"]
+                     for p in pred["protocol"].unique()}
+            pred["kind"] = pred["protocol"].map(kinds)
         pred["set"] = name
         frames.append(pred)
     return pd.concat(frames, ignore_index=True)
@@ -97,6 +105,9 @@ def dem_curves(pred: pd.DataFrame) -> dict:
     return out
 
 
+SAMPLE_COLUMNS = ["protocol", "kind", "reversal", "X", "mu", "A_xy", "stress_ratio"]
+
+
 @dataclass
 class DemCase:
     """One DEM case: its pre-shear steady state and its reversal samples."""
@@ -104,11 +115,27 @@ class DemCase:
     label: str
     group: str
     steady: dict                 # dem_contract.steady_values of the pre-shear; theta_A for positive shear
-    samples: pd.DataFrame = field(default_factory=pd.DataFrame)   # X, mu, A_xy, stress_ratio, protocol
+    samples: pd.DataFrame = field(default_factory=pd.DataFrame)   # SAMPLE_COLUMNS
 
 
 def read_dem_case(case_dir, protocols=REVERSAL_PROTOCOLS) -> DemCase:
-    """Read ``<case_dir>/preshear.csv`` and the reversal runs it holds (``dem_contract.read_series``)."""
+    """Read ``<case_dir>/preshear.csv`` and every reversal of the protocol runs it holds.
+
+    Each run (``dem_contract.read_series``) is split into its transients, one per
+    reversal (``dem_contract.split_transients``; a heaviside or sinusoidal run is one),
+    and each transient's moving samples (``|gammadot|`` above ``RATE_DEAD_BAND`` of the
+    run's median) are tagged with the run's ``protocol``, the reversal's ``kind``
+    (``dem_contract.derived.reversal_kinds``: heaviside or sinusoidal, from the sidecar
+    for a schedule) and its number ``reversal``. ``X = sqrt2 A_xy sign(gammadot)`` and
+    mu are the same in either frame, so a +1 reversal needs no mirroring here.
+
+    Parameters
+    ----------
+    case_dir : path
+        ``results/dem/<label>``.
+    protocols : sequence of str
+        Protocols to read (heaviside, sinusoidal, schedules); a run the case lacks is skipped.
+    """
     case_dir = Path(case_dir)
     if not case_dir.is_dir():
         raise DEMInputError(f"{case_dir}: case directory not found")
@@ -123,15 +150,24 @@ def read_dem_case(case_dir, protocols=REVERSAL_PROTOCOLS) -> DemCase:
         if not path.exists():
             continue
         d = read_series(path, SERIES_COLUMNS, 10, what=f"the {proto} run of the case")
-        g = d["gammadot"].to_numpy()
-        moving = np.abs(g) > RATE_DEAD_BAND * np.median(np.abs(g))
-        frames.append(pd.DataFrame({
-            "protocol": proto, "X": np.sqrt(2.0) * d["A_xy"].to_numpy()[moving] * np.sign(g[moving]),
-            "mu": d["mu"].to_numpy()[moving], "A_xy": d["A_xy"].to_numpy()[moving],
-            "stress_ratio": (d["sigma_xy"] / d["p"]).to_numpy()[moving]}))
+        meta = read_sidecar(path)
+        transients = split_transients(pre, d, meta, what=str(path))
+        kinds = reversal_kinds(meta, proto, what=str(path))
+        if len(kinds) != len(transients):
+            raise DEMInputError(f"{path}: the sidecar's schedule makes {len(kinds)} reversal(s), the run holds "
+                                f"{len(transients)}")
+        median = np.median(np.abs(d["gammadot"].to_numpy()))
+        for tr, kind in zip(transients, kinds):
+            t = tr.data
+            g = t["gammadot"].to_numpy()
+            moving = np.abs(g) > RATE_DEAD_BAND * median
+            frames.append(pd.DataFrame({
+                "protocol": proto, "kind": kind["kind"], "reversal": tr.index,
+                "X": np.sqrt(2.0) * t["A_xy"].to_numpy()[moving] * np.sign(g[moving]),
+                "mu": t["mu"].to_numpy()[moving], "A_xy": t["A_xy"].to_numpy()[moving],
+                "stress_ratio": (t["sigma_xy"] / t["p"]).to_numpy()[moving]}, columns=SAMPLE_COLUMNS))
     group, _ = split_case_label(case_dir.name)
-    samples = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(
-        columns=["protocol", "X", "mu", "A_xy", "stress_ratio"])
+    samples = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(columns=SAMPLE_COLUMNS)
     return DemCase(label=case_dir.name, group=group, steady=steady, samples=samples)
 
 

@@ -18,7 +18,11 @@ bootstrap, at least as wide as the Student t interval) is over seeds (DEM cases:
 and its reversal runs), pooled across ensembles (pressures and inertial
 numbers; the claims are made for every ensemble): a seed's value is the mean
 over its runs (protocols) and, for the model comparisons, over the calibration
-sets that did not see the run. Model comparisons use only out-of-sample
+sets that did not see the run. Every reversal of every protocol is a run; a
+seed's reversals of one kind (Heaviside step, half cosine: the ``kind`` of
+``predictions.csv``; for the model comparisons, scored by one set) are averaged
+first, so a schedule's several reversals weigh as one run of their kind
+(``_per_seed``). Counted claims (claim 3) count reversals. Model comparisons use only out-of-sample
 predictions: a run is scored with a set calibrated on another protocol (e.g.
 ``heaviside_only`` scored on the sinusoidal run) or another inertial number
 (``I<a>`` scored on the runs at ``I<b>``), and the two models are paired on
@@ -53,15 +57,40 @@ def _row(claim_id, claim, source, statistic, unit, null, side, est, low, high, t
 
 
 def _per_seed(values: dict) -> tuple:
-    """(case -> list of values) -> (cases, per-seed means), NaN values dropped, empty seeds left out."""
+    r"""Per-seed means: (case -> list of values, or case -> {group -> list}) -> (cases, means).
+
+    With groups (``_add``: a reversal kind, or a calibration set and a kind), a seed's
+    value is the mean over its groups of the mean within each group,
+
+    .. math:: v_{\mathrm{seed}} = \frac1{|G|} \sum_{g \in G} \frac1{n_g} \sum_{i \in g} v_i
+
+    so the several reversals of one kind a schedule gives a seed count as one run of
+    that kind (they share its packing: the seed stays the unit of every interval). NaN
+    values are dropped, empty groups and seeds left out.
+    """
     cases, means = [], []
     for case, v in sorted(values.items()):
-        v = np.asarray(v, float)
-        v = v[np.isfinite(v)]
-        if v.size:
+        groups = v.values() if isinstance(v, dict) else [v]
+        group_means = []
+        for g in groups:
+            g = np.asarray(g, float)
+            g = g[np.isfinite(g)]
+            if g.size:
+                group_means.append(float(g.mean()))
+        if group_means:
             cases.append(case)
-            means.append(float(v.mean()))
+            means.append(float(np.mean(group_means)))
     return cases, np.array(means)
+
+
+def _add(values: dict, case: str, group, value) -> None:
+    """Append ``value`` to ``case``'s ``group`` (``_per_seed`` averages within a group first)."""
+    values.setdefault(case, {}).setdefault(group, []).append(value)
+
+
+def _kind(curve: pd.DataFrame) -> str:
+    """The reversal kind of a curve of ``predictions.csv`` (heaviside: a step; sinusoidal: a half cosine)."""
+    return str(curve["kind"].iloc[0])
 
 
 def _fmt(x, digits=3):
@@ -83,9 +112,9 @@ def fall_rows(dem: dict, steady: dict, boot) -> list:
             x = measures.norm_and_angle(a, b)[0] if q == "A_norm" else measures.smooth(d["mu"])
             ref = steady[case]["A_norm"] if q == "A_norm" else steady[case]["mu"]
             f = measures.fall(d["s_rev"].to_numpy(), x, ref, noisy=True)
-            excess.setdefault(case, []).append(f["excess"])
-            depth.setdefault(case, []).append(f["depth"])
-            s_min.setdefault(case, []).append(f["s_min"])
+            _add(excess, case, _kind(d), f["excess"])
+            _add(depth, case, _kind(d), f["depth"])
+            _add(s_min, case, _kind(d), f["s_min"])
         _, e = _per_seed(excess)
         est, lo, hi, n = boot(e)
         _, dd = _per_seed(depth)
@@ -208,7 +237,8 @@ def early_error_differences(runs, column, window):
     Returns
     -------
     (dict, dict, list, int)
-        case -> differences of its runs (``_per_seed`` makes the per-seed means), model -> RMSE of every
+        case -> (set, kind) -> differences of its runs (``_per_seed`` makes the per-seed means: a
+        seed's reversals of one kind scored by one set averaged first), model -> RMSE of every
         run, the out-of-sample (key, curves) pairs and how many runs lacked a model (``_oos``).
     """
     pairs, missing = _oos(runs)
@@ -218,7 +248,7 @@ def early_error_differences(runs, column, window):
         e = {m: measures.early_rmse(s, d, _on_dem(cur, m, column), window) for m in MODELS}
         for m in MODELS:
             r[m].append(e[m])
-        diffs.setdefault(key[1], []).append(e["model1"] - e["model2"])
+        _add(diffs, key[1], (key[0], _kind(cur["dem"])), e["model1"] - e["model2"])
     return diffs, r, pairs, missing
 
 
@@ -255,7 +285,7 @@ def turning_row(runs, boot) -> dict:
                                    noisy=False)["axis"]
             opp[m] = float(ax in ("90", "0/180") and ax != ref)
             count[m] += int(opp[m])
-        diffs.setdefault(key[1], []).append(opp["model2"] - opp["model1"])
+        _add(diffs, key[1], (key[0], _kind(d)), opp["model2"] - opp["model1"])
     _, v = _per_seed(diffs)
     est, lo, hi, n = boot(v)
     return _row(
@@ -270,7 +300,7 @@ def turning_row(runs, boot) -> dict:
 
 def width_row(runs, boot) -> dict:
     """Claim 6: the sinusoidal transition of theta_A, too sharp in Model 2, closer in Model 1."""
-    pairs, missing = _oos({k: v for k, v in runs.items() if k[3] == "sinusoidal"})
+    pairs, missing = _oos({k: v for k, v in runs.items() if "dem" in v and _kind(v["dem"]) == "sinusoidal"})
     diffs, w = {}, {"dem": [], "model1": [], "model2": []}
     for key, cur in pairs:
         d = cur["dem"]
@@ -280,7 +310,7 @@ def width_row(runs, boot) -> dict:
         w["dem"].append(wd)
         for m in MODELS:
             w[m].append(wm[m])
-        diffs.setdefault(key[1], []).append(abs(wm["model1"] - wd) - abs(wm["model2"] - wd))
+        _add(diffs, key[1], (key[0], "sinusoidal"), abs(wm["model1"] - wd) - abs(wm["model2"] - wd))
     _, v = _per_seed(diffs)
     est, lo, hi, n = boot(v)
     mean = {k: np.nanmean(x) if np.isfinite(x).any() else math.nan for k, x in ((k, np.asarray(x, float))

@@ -6,6 +6,7 @@ r"""Command line of the model-against-DEM comparison.
         --set all --protocols heaviside sinusoidal [--train-cases LABEL ...] [--train-protocols ...] \
         --out results/compare/all
         # -> predictions.csv, errors.csv, claims.csv, fig4_heaviside.png, fig5_sinusoidal.png
+        # (each figure: every reversal of its kind, Heaviside step or half cosine, of every protocol)
     python -m compare heldout --errors results/compare/*/errors.csv --out results/compare/heldout_errors.csv
     python -m compare sensitivity --dem ... --params results/calibration/all/params.yaml --set all \
         --protocols heaviside sinusoidal --out results/compare/all
@@ -24,6 +25,7 @@ from pathlib import Path
 
 from .dem import PROTOCOL_NAME, REVERSAL_PROTOCOLS, DEMInputError
 
+#: Reversal kind (``dem_contract.derived.REVERSAL_KINDS``) -> its figure.
 FIGURE_NAMES = {"heaviside": "fig4_heaviside.png", "sinusoidal": "fig5_sinusoidal.png"}
 
 
@@ -46,9 +48,11 @@ def _cmd_predict(args):
     c.predictions.to_csv(out / "predictions.csv", index=False)
     c.errors.to_csv(out / "errors.csv", index=False)
     c.claims.to_csv(out / "claims.csv", index=False)
-    for protocol in (p for p in args.protocols if p in FIGURE_NAMES):   # a schedule has tables, no figure
-        figures.reversal_figure(c.ensembles, protocol, out / FIGURE_NAMES[protocol], zoom=args.zoom,
-                                title=f"{protocol} reversal: DEM against Model 1 and Model 2 "
+    kinds = args.figures if args.figures is not None else [
+        k for k in FIGURE_NAMES if any(e.attrs.get("kind") == k for e in c.ensembles.values())]
+    for kind in kinds:   # every reversal of that kind, of every protocol
+        figures.reversal_figure(c.ensembles, kind, out / FIGURE_NAMES[kind], zoom=args.zoom,
+                                title=f"{kind} reversal: DEM against Model 1 and Model 2 "
                                       f"(calibration set '{args.set}')")
     bad = c.errors[c.errors["status"] != "ok"]
     for _, r in bad.iterrows():
@@ -110,6 +114,9 @@ def build_parser():
     p.add_argument("--train-cases", nargs="*", default=None, help="labels the set was calibrated on (default all)")
     p.add_argument("--train-protocols", nargs="*", default=None, help="protocols it was calibrated on (default all)")
     p.add_argument("--zoom", type=float, default=0.1, help="strain range of the zoom inset (default 0.1)")
+    p.add_argument("--figures", nargs="*", default=None, choices=list(FIGURE_NAMES),
+                   help="reversal kinds to draw, each with every reversal of that kind "
+                        "(default: every kind the runs hold)")
     p.add_argument("--dem-smooth", type=int, default=5, help="running mean (samples) on the DEM for the claims")
     p.set_defaults(func=_cmd_predict)
 

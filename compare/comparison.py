@@ -11,6 +11,15 @@ Two levels of comparison:
   The DEM band is one standard deviation over seeds of each seed's own |A|,
   theta_A (modulo 180) and mu about the ensemble value.
 
+Every reversal of every protocol is compared, one ensemble per transient (a
+schedule's k-th reversal across seeds, ``transient_groups``); each row names the
+reversal's ``kind`` (heaviside: a step; sinusoidal: a half cosine), its number
+in its run (``reversal``) and its ``direction`` (-1 against the pre-shear, +1
+back along it). The model is integrated in the run's own frame; the curves of a
++1 reversal (``predictions.csv``, the claims, the figures) are then reflected
+x -> -x into the frame of the -1 ones (``dem.canonical``). Errors do not change
+under the reflection.
+
 Claims (``metrics.claims``) are measured on the DEM after a centred running
 mean over ``dem_smooth`` samples (its noise otherwise sets the minima), and on
 the models as they are. The steady values the recovery is measured against are
@@ -20,7 +29,7 @@ each model's own steady state (``model.steady_state``) for the models.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -30,7 +39,7 @@ from dem_contract import DEMInputError, angle_difference, fabric_angle_deg, fabr
 from model import load_params, steady_state
 
 from . import metrics
-from .dem import load_reversals
+from .dem import canonical, load_reversals
 from .predict import DEFAULT_FRICTION, MODELS, predict
 from .metrics import QUANTITIES
 
@@ -160,13 +169,18 @@ def run(case_dirs, params_path, protocols, set_name="all", train_cases=None, tra
         for m in MODELS:
             steady.setdefault((m, sign), model_steady(params, m, friction[m], sign))
         steady_here = {m: steady[(m, sign)] for m in MODELS}
+        # from here on every curve in the frame of the -1 reversals (a +1 one reflected x -> -x)
+        preds = {m: [replace(p, table=canonical(r, p.table)) for r, p in zip(revs, plist)]
+                 for m, plist in preds.items()}
+        revs = [replace(r, data=canonical(r)) for r in revs]
+        tags = dict(kind=revs[0].kind, reversal=revs[0].reversal, direction=revs[0].direction)
         for i, r in enumerate(revs):
             base = dict(set=set_name, level="seed", case=r.label, group=r.group, protocol=key,
                         in_sample=r.label in train_cases and protocol in train_protocols)
             curves, errors, claims = _seed_rows(r, {m: preds[m][i] for m in MODELS}, base, steady_here, dem_smooth)
-            pred_rows += curves
-            err_rows += errors
-            claim_rows += claims
+            pred_rows += [c.assign(**tags) for c in curves]
+            err_rows += [dict(e, **tags) for e in errors]
+            claim_rows += [dict(c, **tags) for c in claims]
         for group in dict.fromkeys(r.group for r in revs):
             idx = [i for i, r in enumerate(revs) if r.group == group]
             grevs = [revs[i] for i in idx]
@@ -174,11 +188,20 @@ def run(case_dirs, params_path, protocols, set_name="all", train_cases=None, tra
                         in_sample=all(r.label in train_cases for r in grevs) and protocol in train_protocols)
             ens, errors, claims = _ensemble_rows(grevs, {m: [preds[m][i] for i in idx] for m in MODELS}, base,
                                                  steady_here, friction, dem_smooth)
+            ens.attrs.update(tags, protocol=key)
             ensembles[(group, key)] = ens
-            err_rows += errors
-            claim_rows += claims
-    return Comparison(predictions=pd.concat(pred_rows, ignore_index=True), errors=pd.DataFrame(err_rows),
-                      claims=pd.DataFrame(claim_rows), ensembles=ensembles)
+            err_rows += [dict(e, **tags) for e in errors]
+            claim_rows += [dict(c, **tags) for c in claims]
+    return Comparison(predictions=pd.concat(pred_rows, ignore_index=True), errors=_tags_last(pd.DataFrame(err_rows)),
+                      claims=_tags_last(pd.DataFrame(claim_rows)), ensembles=ensembles)
+
+
+TAG_COLUMNS = ("kind", "reversal", "direction")
+
+
+def _tags_last(df: pd.DataFrame) -> pd.DataFrame:
+    """The reversal's ``kind``, ``reversal`` and ``direction`` as the table's last columns."""
+    return df[[c for c in df.columns if c not in TAG_COLUMNS] + [c for c in TAG_COLUMNS if c in df.columns]]
 
 
 def transient_groups(case_dirs, protocols):
@@ -186,15 +209,24 @@ def transient_groups(case_dirs, protocols):
 
     A heaviside or sinusoidal protocol is one group under its own name; a reversal
     schedule with several reversals one group per reversal, ``<protocol>_r<k>``, holding
-    the k-th reversal of every case that ran it (the same direction and place in the
-    schedule across seeds, so they form one ensemble).
+    the k-th reversal of every case that ran it (the same kind, direction and place in
+    the schedule across seeds, so they form one ensemble).
+
+    Raises
+    ------
+    DEMInputError
+        When the k-th reversals of a schedule differ in kind or direction between cases.
     """
     for protocol in protocols:
         per_case = [load_reversals(d, protocol) for d in case_dirs_with(case_dirs, protocol)]
         n = max(len(revs) for revs in per_case)
         for k in range(n):
-            yield protocol, (protocol if n == 1 else f"{protocol}_r{k + 1}"), [revs[k] for revs in per_case
-                                                                              if len(revs) > k]
+            group = [revs[k] for revs in per_case if len(revs) > k]
+            tags = {(r.kind, r.direction) for r in group}
+            if len(tags) > 1:
+                raise DEMInputError(f"reversal {k + 1} of {protocol} differs between cases (kind, direction): "
+                                    + ", ".join(f"{r.path}: {r.kind} {r.direction:+d}" for r in group))
+            yield protocol, (protocol if n == 1 else f"{protocol}_r{k + 1}"), group
 
 
 def case_dirs_with(case_dirs, protocol):

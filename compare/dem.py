@@ -27,6 +27,10 @@ Conventions
   strain, the values the calibration and the campaign summary report), the
   values the reversal recovers towards (by symmetry the mirrored steady state
   has the same |A| and mu).
+- Each reversal has a kind (a Heaviside step or a half cosine) and a direction
+  (-1 against the pre-shear, +1 back along it) from its sidecar, or from the
+  protocol's name for the classic runs (``dem_contract.derived.reversal_kinds``);
+  ``canonical`` reflects a +1 reversal (x -> -x) into the frame of the -1 ones.
 - The reversal run must reverse the pre-shear (``dem_contract.reversal_indices``
   on the pre-shear's rate followed by the run's).
 - ``s_rev``: strain travelled since the reversal, the running sum of
@@ -44,6 +48,7 @@ import pandas as pd
 
 from dem_contract import (PRE_REVERSAL_WINDOW, REVERSAL_PROTOCOLS, DEMInputError, fabric_angle_deg, fabric_norm,
                           read_series, read_sidecar, split_case_label, split_transients, steady_values)
+from dem_contract.derived import mirror_reversal, reversal_kinds
 
 #: A reversal protocol's name: heaviside, sinusoidal or a schedule's (docs/scene.md).
 PROTOCOL_NAME = re.compile(r"^[a-z][a-z0-9_]*$")
@@ -75,7 +80,17 @@ class Reversal:
         Time and strain at which the reversal starts (the sidecar's
         ``reversal_t``, ``reversal_strain`` when present, else the first sample).
     rate_before : float
-        Median rate at the end of the pre-shear (the rate the reversal starts from).
+        Median rate at the end of the leg before the reversal (the rate it starts from).
+    kind : {"heaviside", "sinusoidal"}
+        A step of the rate or a half-cosine transition (``dem_contract.derived.reversal_kinds``):
+        it, not the protocol's name, sets the imposed history (``predict``) and the figure.
+    direction : int
+        -1: against the pre-shear; +1: back along it (a schedule's return), the mirror image
+        of a -1 reversal (``dem_contract.derived.mirror_reversal``).
+    transition_strain : float or None
+        The half cosine's strain (None for a step, or when the sidecar does not say).
+    reversal : int
+        The reversal's number in its run, from 1.
     """
 
     label: str
@@ -92,6 +107,10 @@ class Reversal:
     strain0: float
     rate_before: float = float("nan")
     meta: dict = field(default_factory=dict)
+    kind: str = "heaviside"
+    direction: int = -1
+    transition_strain: float | None = None
+    reversal: int = 1
 
 
 def load_reversal(case_dir, protocol: str, a0_window: float = A0_WINDOW) -> Reversal:
@@ -134,13 +153,22 @@ def load_reversals(case_dir, protocol: str, a0_window: float = A0_WINDOW) -> lis
     rev = read_series(path, USED_COLUMNS, MIN_SAMPLES, what=f"the {protocol} run of the case")
     meta = read_sidecar(path)
     transients = split_transients(pre, rev, meta, a0_window, what=str(path), min_samples=MIN_SAMPLES)
+    kinds = reversal_kinds(meta, protocol, what=str(path))
+    if len(kinds) != len(transients):
+        raise DEMInputError(f"{path}: the sidecar's schedule makes {len(kinds)} reversal(s), the run holds "
+                            f"{len(transients)}")
+    pre_sign = transients[0].initial["gammadot_sign"]   # the pre-shear's direction (the leg before reversal 1)
     steady = steady_values(pre)
     group, seed = split_case_label(case_dir.name)
     out = []
-    for tr in transients:
+    for tr, kind in zip(transients, kinds):
         g_pre = tr.initial["gammadot"]
         if g_pre == 0.0:
             raise DEMInputError(f"{path}: the rate before reversal {tr.index} does not move (median {g_pre:.4g})")
+        if tr.sign != kind["direction"] * pre_sign:
+            raise DEMInputError(f"{path}: reversal {tr.index} shears with sign {tr.sign:+.0f}, its sidecar's direction "
+                                f"{kind['direction']:+d} relative to the pre-shear (sign {pre_sign:+.0f}) says "
+                                f"{kind['direction'] * pre_sign:+.0f}")
         data = tr.data.copy()
         data["tau"] = data["t"] - tr.t0
         st = data["strain"].to_numpy()
@@ -151,5 +179,22 @@ def load_reversals(case_dir, protocol: str, a0_window: float = A0_WINDOW) -> lis
                             A0=(tr.initial["A_xx"], tr.initial["A_xy"]), steady_A=steady["A_norm"],
                             steady_mu=steady["mu"], steady_fabric=(steady["A_xx"], steady["A_xy"]), t0=tr.t0,
                             strain0=tr.strain0, rate_before=g_pre,
-                            meta=meta if tr.n_reversals == 1 else dict(meta, reversal=tr.index)))
+                            meta=meta if tr.n_reversals == 1 else dict(meta, reversal=tr.index),
+                            kind=kind["kind"], direction=kind["direction"],
+                            transition_strain=kind["transition_strain"], reversal=tr.index))
     return out
+
+
+_DATA = object()   # canonical's default: the reversal's own data
+
+
+def canonical(rev: Reversal, table=_DATA) -> pd.DataFrame | None:
+    """``rev``'s data (or a model's ``table`` on its samples) in the frame of the -1 reversals.
+
+    A +1 reversal (back along the pre-shear) is reflected x -> -x
+    (``dem_contract.derived.mirror_reversal``: A_xy, theta_A, strain, rate and shear stress
+    change sign or turn to 180 - theta_A; |A|, mu and ``s_rev`` do not); a -1 one is
+    returned as it is (the same object). A failed model's table (None) stays None.
+    """
+    t = rev.data if table is _DATA else table
+    return mirror_reversal(t) if (t is not None and rev.direction > 0) else t

@@ -40,27 +40,38 @@ def _plot_panel(ax, ens, q, models, zoom=None):
             ax.plot(s[m], (_broken(v) if q == "theta_A" else v)[m], **STYLE[model])
 
 
-def reversal_figure(ensembles, protocol, path, models=("model1", "model2"), zoom=0.1, title=""):
+def reversal_figure(ensembles, kind, path, models=("model1", "model2"), zoom=0.1, title=""):
     """Fig. 4 (Heaviside) or Fig. 5 (sinusoidal): |A|, theta_A, mu against strain.
+
+    One pair of columns (whole run, zoom) per ensemble of reversals of that kind:
+    the classic run of each (pressure, I) group and every reversal of that kind of
+    a schedule, a +1 one already reflected into the frame of the -1 ones
+    (``comparison.run``).
 
     Parameters
     ----------
     ensembles : dict
-        (group, protocol) -> DataFrame of ``comparison.ensemble_curves``.
-    protocol : str
+        (group, key) -> DataFrame of ``comparison.ensemble_curves``, whose ``attrs`` name
+        its ``kind`` and ``direction`` (without them: the key is the kind).
+    kind : {"heaviside", "sinusoidal"}
     path : path
         PNG to write.
     zoom : float
         Strain range of the inset on the start of the reversal (the paper's Fig. 4c).
+
+    Returns
+    -------
+    list of (group, key)
+        The ensembles drawn, in order.
     """
-    groups = [g for (g, p) in ensembles if p == protocol]
-    if not groups:
-        raise ValueError(f"no DEM ensemble for protocol {protocol!r}")
-    ncol = 2 * len(groups)
-    fig, axes = plt.subplots(3, ncol, figsize=(max(8.0, 6.8 * len(groups)), 9.0), squeeze=False,
-                             gridspec_kw=dict(width_ratios=[2.2, 1.0] * len(groups)))
-    for j, g in enumerate(groups):
-        ens = ensembles[(g, protocol)]
+    keys = [(g, p) for (g, p), ens in ensembles.items() if ens.attrs.get("kind", p) == kind]
+    if not keys:
+        raise ValueError(f"no DEM reversal of kind {kind!r} to draw (none of the compared protocols has one)")
+    ncol = 2 * len(keys)
+    fig, axes = plt.subplots(3, ncol, figsize=(max(8.0, 6.8 * len(keys)), 9.0), squeeze=False,
+                             gridspec_kw=dict(width_ratios=[2.2, 1.0] * len(keys)))
+    for j, (g, p) in enumerate(keys):
+        ens = ensembles[(g, p)]
         n_ok = ens.attrs.get("n_ok", {})
         for k, z in enumerate((None, zoom)):
             col = 2 * j + k
@@ -83,7 +94,8 @@ def reversal_figure(ensembles, protocol, path, models=("model1", "model2"), zoom
         n_seeds = ens.attrs.get("n_seeds", 0)
         notes = [f"{STYLE[m]['label'].split(' (')[0]} on {n} of {n_seeds} seeds"
                  for m, n in n_ok.items() if n < n_seeds]
-        axes[0, 2 * j].set_title(f"{g} ({n_seeds} seeds)" + (f"; {'; '.join(notes)} (see errors.csv)" if notes else ""),
+        name = g if p == kind else f"{g}, {p}" + (" (+1, mirrored)" if ens.attrs.get("direction", -1) > 0 else "")
+        axes[0, 2 * j].set_title(f"{name} ({n_seeds} seeds)" + (f"; {'; '.join(notes)} (see errors.csv)" if notes else ""),
                                  fontsize=9, loc="left")
         axes[0, 2 * j + 1].set_title("start of the reversal", fontsize=9)
     handles, labels = axes[0, 0].get_legend_handles_labels()
@@ -92,6 +104,7 @@ def reversal_figure(ensembles, protocol, path, models=("model1", "model2"), zoom
     fig.tight_layout(rect=(0, 0, 1, 0.91))
     fig.savefig(path, dpi=150)
     plt.close(fig)
+    return keys
 
 
 def sensitivity_figure(bands, path):

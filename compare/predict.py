@@ -1,7 +1,9 @@
 r"""Model 1 and Model 2 integrated on a DEM run's own imposed history.
 
 The imposed history is the run's measured ``gammadot`` (walls over gap), cleaned
-as follows and integrated with ``model.tabulated``:
+after the reversal's kind (``Reversal.kind``, from its sidecar: a schedule's
+step is cleaned as a Heaviside run, its half cosine as a sinusoidal one, in
+either direction) and integrated with ``model.tabulated``:
 
 - Heaviside: the walls switch in one step and then keep their speed, so the rate
   after the switch is one constant, taken as the median of the measured rate.
@@ -80,7 +82,7 @@ def clean_rate(rev: Reversal):
         Width of the running mean used (1: none; 0: replaced by a constant).
     """
     g = rev.data["gammadot"].to_numpy(dtype=float)
-    if rev.protocol == "heaviside":
+    if rev.kind == "heaviside":
         after = g[g * np.median(g) > 0]
         return np.full_like(g, float(np.median(after))), 0
     width = 1
@@ -108,7 +110,7 @@ def imposed_history(rev: Reversal):
     """
     tau = rev.data["tau"].to_numpy(dtype=float)
     g, width = clean_rate(rev)
-    if rev.protocol == "heaviside":
+    if rev.kind == "heaviside":
         ds = rev.data["strain"].to_numpy(dtype=float) - rev.strain0
         t_eval = np.maximum.accumulate(np.clip(ds / g[0], 0.0, None))   # equal strain, monotone
         history = tabulated(np.array([0.0, max(tau[-1], t_eval[-1])]), np.array([g[0], g[0]]))

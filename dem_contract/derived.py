@@ -20,6 +20,11 @@ report the same quantity of the same run agree (docs/data-contract.md).
 - ``reversal_times`` / ``split_transients``: the reversals of a run (one, or
   several for a reversal schedule) and the run split into transients, one per
   reversal, each with the state just before it.
+- ``reversal_kinds``: each reversal's kind (a Heaviside step or a half-cosine
+  transition), direction (-1 against the pre-shear, +1 back along it) and
+  transition strain.
+- ``mirror_reversal``: a +1 reversal reflected (x -> -x) into the frame of the
+  -1 ones.
 """
 from __future__ import annotations
 
@@ -36,7 +41,8 @@ from .series import DEMInputError
 __all__ = ["STEADY_FRACTION", "STEADY_COLUMNS", "PRE_REVERSAL_WINDOW", "MIN_PRE_REVERSAL_SAMPLES",
            "REVERSAL_DEAD_BAND", "REVERSAL_MIN_RUN", "steady_window", "steady_values", "fabric_norm",
            "fabric_angle_deg", "axial_mean", "angle_difference", "reversal_indices", "pre_reversal_state",
-           "Transient", "reversal_times", "split_transients"]
+           "Transient", "reversal_times", "split_transients", "REVERSAL_KINDS", "reversal_kinds",
+           "MIRRORED_COLUMNS", "mirror_reversal"]
 
 #: Last fraction of a pre-shear's strain path taken as its steady state.
 STEADY_FRACTION = 0.5
@@ -384,4 +390,124 @@ def split_transients(pre, run, meta=None, window: float = PRE_REVERSAL_WINDOW, w
         initial = pre_reversal_state(leg, window)
         out.append(Transient(index=k + 1, n_reversals=len(starts), data=data, t0=float(starts[k]),
                              strain0=float(strains[k]), initial=initial, sign=-initial["gammadot_sign"]))
+    return out
+
+
+#: A reversal's kind: a step of the rate, or a half-cosine transition (docs/scene.md).
+REVERSAL_KINDS = ("heaviside", "sinusoidal")
+#: The sidecar's ``transition`` -> the reversal's kind.
+TRANSITION_KINDS = {"heaviside": "heaviside", "half_cosine": "sinusoidal"}
+
+
+def _kind_of(entry: dict, what: str, k: int) -> dict:
+    """One reversal's ``{kind, direction, transition_strain}`` from a sidecar entry (``reversals`` or ``segments``)."""
+    transition = entry.get("transition", "heaviside")
+    if transition not in TRANSITION_KINDS:
+        raise DEMInputError(f"{what}: reversal {k}: transition {transition!r} is not one of "
+                            f"{', '.join(TRANSITION_KINDS)}")
+    direction = entry.get("direction")
+    if direction not in (-1, 1):
+        raise DEMInputError(f"{what}: reversal {k}: direction {direction!r} is not -1 or +1")
+    ts = entry.get("transition_strain")
+    if transition == "half_cosine" and not (isinstance(ts, (int, float)) and ts > 0):
+        raise DEMInputError(f"{what}: reversal {k}: a half cosine needs a positive transition_strain (got {ts!r})")
+    return {"kind": TRANSITION_KINDS[transition], "direction": int(direction),
+            "transition_strain": float(ts) if transition == "half_cosine" else None}
+
+
+def reversal_kinds(meta: dict | None, protocol: str, what: str = "run") -> list:
+    r"""Each reversal of a run: its kind, its direction and its transition strain.
+
+    The kind is ``"heaviside"`` (the rate steps from one direction to the other) or
+    ``"sinusoidal"`` (it turns through a half cosine over ``transition_strain``,
+    :math:`\dot\gamma(t) = \dot\gamma_0 [\tfrac{a+b}2 + \tfrac{a-b}2 \cos(\pi (t - t_k)/T)]`
+    from direction :math:`a` to :math:`b`, docs/scene.md). The direction is that of
+    the shear after the reversal relative to the pre-shear's: -1 against it, +1 back
+    along it. They come, in order of preference, from
+
+    1. the sidecar's ``reversals`` (a schedule: one entry per reversal, with
+       ``direction``, ``transition`` and, for a half cosine, ``transition_strain``);
+    2. its ``segments`` (the expanded schedule): a reversal at every segment whose
+       direction differs from the one before it (the pre-shear's, +1, before the first);
+    3. the protocol's name for the classic runs: ``heaviside`` is one step against the
+       pre-shear, ``sinusoidal`` one half cosine against it (its transition strain from
+       the sidecar's scene, ``scene.sinusoidal.transition_strain``, when present).
+
+    Parameters
+    ----------
+    meta : dict or None
+        The run's sidecar (``series.read_sidecar``).
+    protocol : str
+        The run's protocol (its file's stem).
+    what : str
+        The run's name in error messages (its file).
+
+    Returns
+    -------
+    list of dict
+        ``{"kind", "direction", "transition_strain"}`` per reversal, in order
+        (``transition_strain`` None for a step).
+
+    Raises
+    ------
+    DEMInputError
+        A schedule whose sidecar states neither ``reversals`` nor ``segments`` (its
+        reversals' kinds cannot be known), or an entry with an unknown transition, a
+        direction other than -1/+1, or a half cosine without a positive transition strain.
+    """
+    meta = meta or {}
+    if meta.get("reversals"):
+        return [_kind_of(r, what, k + 1) for k, r in enumerate(meta["reversals"])]
+    if meta.get("segments"):
+        out, prev = [], 1
+        for seg in meta["segments"]:
+            if seg.get("direction") != prev:
+                out.append(_kind_of(seg, what, len(out) + 1))
+                prev = seg.get("direction")
+        return out
+    if protocol == "heaviside":
+        return [{"kind": "heaviside", "direction": -1, "transition_strain": None}]
+    if protocol == "sinusoidal":
+        ts = (meta.get("scene") or {}).get("sinusoidal", {}).get("transition_strain")
+        return [{"kind": "sinusoidal", "direction": -1, "transition_strain": None if ts is None else float(ts)}]
+    raise DEMInputError(f"{what}: the sidecar lists neither 'reversals' nor 'segments', so the kind of the "
+                        f"reversals of schedule {protocol!r} is unknown (heaviside and sinusoidal runs need none)")
+
+
+#: Columns an x -> -x reflection changes sign of (``mirror_reversal``).
+MIRRORED_COLUMNS = ("strain", "gammadot", "U_top", "U_bottom", "A_xy", "sigma_xy", "sigma_xy_bulk")
+
+
+def mirror_reversal(data: pd.DataFrame) -> pd.DataFrame:
+    r"""A run reflected through x -> -x: a +1 reversal in the frame of the -1 ones.
+
+    A reversal back along the pre-shear (direction +1) is the mirror image of one
+    against it: under the reflection :math:`x \mapsto -x` the fabric
+    :math:`A = [[a, b], [b, -a]]` becomes :math:`[[a, -b], [-b, -a]]`, every
+    x-velocity and the shear stress change sign, and so
+
+    .. math::
+        A_{xy} \mapsto -A_{xy}, \quad \theta_A \mapsto (180^\circ - \theta_A) \bmod 180^\circ,
+        \quad \dot\gamma, \gamma, \sigma_{xy}, U \mapsto -\dot\gamma, -\gamma, -\sigma_{xy}, -U
+
+    while :math:`A_{xx}`, :math:`|A|`, :math:`\mu = |\sigma_{xy}|/p`, p, the strain
+    travelled ``s_rev`` and :math:`X = \sqrt2 A_{xy} \operatorname{sign}\dot\gamma`
+    are unchanged. Applying it twice gives the run back.
+
+    Parameters
+    ----------
+    data : pandas.DataFrame
+        Rows of a run (any of ``MIRRORED_COLUMNS`` and ``theta_A``; other columns are kept).
+
+    Returns
+    -------
+    pandas.DataFrame
+        A reflected copy.
+    """
+    out = data.copy()
+    for c in MIRRORED_COLUMNS:
+        if c in out:
+            out[c] = -out[c]
+    if "theta_A" in out:
+        out["theta_A"] = np.mod(180.0 - out["theta_A"].to_numpy(dtype=float), 180.0)
     return out

@@ -109,7 +109,9 @@ def write_case(case_dir, params, seed=1, model="model1", friction="eq2", I=1e-3,
         The reversal runs to write after the pre-shear.
     schedules : dict, optional
         Reversal schedules to write too, name -> list of (strain, direction) segments
-        with sharp reversals (direction relative to the pre-shear, as in docs/scene.md):
+        with sharp reversals, or (strain, direction, transition_strain) for a reversal
+        through a half cosine within the segment's strain (direction relative to the
+        pre-shear, as in docs/scene.md):
         one run each, whose sidecar lists every reversal (``reversals``), sampled as
         the DEM samples it (a row at each reversal inside the run, the state just
         before it, then fine sampling again).
@@ -161,13 +163,23 @@ def _schedule_run(params, segs, A_end, rng, I, fabric_noise, mu_noise, strain0, 
     Returns the contract table and the sidecar's reversal list.
     """
     parts, rev, A, t_at, s_at, prev = [], [], A_end, 0.0, 0.0, 1
-    for k, (length, direction) in enumerate(segs):
-        t = strain_grid(length, fine, fine_window, coarse)
-        sim = simulate(params, tabulated(t, np.full_like(t, float(direction))), A0=A, t_eval=t, **kw)
+    for k, (length, direction, *half_cosine) in enumerate(segs):
+        if half_cosine and direction != prev:   # the rate turns from prev to direction through a half cosine
+            ts = float(half_cosine[0])
+            h = sinusoidal(0.0, ts, length - ts)
+            t_fine = ts + fine_window
+            t = np.unique(np.round(np.concatenate(
+                [np.arange(0.0, t_fine, fine), np.arange(t_fine, h.t_end, coarse), [h.t_end]]), 12))
+            g = prev * h.gammadot(t)
+        else:
+            t = strain_grid(length, fine, fine_window, coarse)
+            g = np.full_like(t, float(direction))
+        sim = simulate(params, tabulated(t, g), A0=A, t_eval=t, **kw)
         A = (float(sim["A_xx"].iloc[-1]), float(sim["A_xy"].iloc[-1]))
         if direction != prev:
             rev.append({"t": t0 + t_at / I, "strain": strain0 + s_at, "direction": int(direction),
-                        "transition": "heaviside"})
+                        "transition": "half_cosine" if half_cosine else "heaviside"}
+                       | ({"transition_strain": float(half_cosine[0])} if half_cosine else {}))
         sim = sim.assign(t=sim["t"] + t_at, strain=sim["strain"] + s_at)
         parts.append(sim if k == 0 else sim.iloc[1:])   # the segment's first row is the previous one's last
         t_at, s_at, prev = t_at + length, s_at + float(sim["strain"].iloc[-1] - sim["strain"].iloc[0]), direction

@@ -233,6 +233,57 @@ def test_a_steady_angle_above_135_degrees_contradicts_the_reachable_steady_row()
     assert "p1_I0.001_s0, p1_I0.001_s1, p1_I0.001_s2" in row["detail"]
 
 
+# --------------------------------------------------------------------------- reversal schedules
+
+
+def with_schedule_copies(dirs, root):
+    """The cases with three one-reversal schedules that repeat their classic runs: ``again_h``, ``again_h2``
+    (a step) and ``again_s`` (a half cosine), so each seed has three Heaviside reversals of equal values and
+    two sinusoidal ones (a mean over runs that ignored the kinds would weigh the Heaviside ones 3:2)."""
+    import json
+    import shutil
+    out = []
+    for d in dirs:
+        case = root / d.name
+        shutil.copytree(d, case)
+        for name, classic, transition in (("again_h", "heaviside", {"transition": "heaviside"}),
+                                          ("again_h2", "heaviside", {"transition": "heaviside"}),
+                                          ("again_s", "sinusoidal", {"transition": "half_cosine",
+                                                                     "transition_strain": 0.1})):
+            shutil.copy(case / f"{classic}.csv", case / f"{name}.csv")
+            meta = json.loads((case / f"{classic}.json").read_text())
+            meta["reversals"] = [dict(t=meta["reversal_t"], strain=meta["reversal_strain"], direction=-1, **transition)]
+            (case / f"{name}.json").write_text(json.dumps(meta))
+        out.append(case)
+    return out
+
+
+def test_claims_over_cases_with_a_schedule_use_one_value_per_seed_and_count_every_reversal(model1_case, tmp_path):
+    root, dirs, _ = model1_case
+    protocols = ["heaviside", "sinusoidal", "again_h", "again_h2", "again_s"]
+    cases = with_schedule_copies(dirs, tmp_path)
+    c = comparison.run(cases, root / "params.yaml", protocols, set_name="other", train_cases=[])
+    pred = c.predictions.assign(in_sample=False)
+    kinds = [("again_h", "heaviside"), ("again_h2", "heaviside"), ("again_s", "sinusoidal"),
+             ("heaviside", "heaviside"), ("sinusoidal", "sinusoidal")]
+    assert sorted(pred.drop_duplicates("protocol")[["protocol", "kind"]].itertuples(index=False)) == kinds
+    dem_cases = [read_dem_case(d, protocols) for d in cases]
+    assert sorted(dem_cases[0].samples.groupby(["protocol", "kind"]).groups) == kinds
+    with_copies = claims_table(pred, dem_cases, eq2=None, n_resamples=1000).set_index("claim_id")
+    classic = claims_table(pred[pred["protocol"].isin(["heaviside", "sinusoidal"])],
+                           [read_dem_case(d) for d in cases], eq2=None, n_resamples=1000).set_index("claim_id")
+    # a seed's reversals of one kind are averaged first: repeating them leaves every seed's value, so every
+    # interval over seeds, as it was (the collapse, 2a, pools the samples of a seed: more samples, same seeds)
+    per_seed = ["1a", "1b", "4", "5", "6", "7", "8"]
+    assert classic.loc[per_seed, "n"].tolist() == [4] * 7
+    for col in ("estimate", "low", "high", "n"):
+        assert with_copies.loc[per_seed, col].tolist() == pytest.approx(classic.loc[per_seed, col].tolist(),
+                                                                        rel=1e-12, nan_ok=True), col
+    assert with_copies.loc["2a", "n"] == classic.loc["2a", "n"] == 4
+    # the counted claim counts reversals: five per seed now
+    assert (classic.loc["3", "n"], with_copies.loc["3", "n"]) == (8, 20)
+
+
 # --------------------------------------------------------------------------- command line
 
 

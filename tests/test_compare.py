@@ -123,6 +123,11 @@ def test_pole_error_of_model1_is_a_table_row_not_a_crash(tmp_path):
     m1 = err[err["model"] == "model1"]
     assert m1["status"].str.contains("PoleError").any()
     assert (err.loc[err["model"] == "model2", "status"] == "ok").all()
+    # a failed model has no curve, so no errors (not the DEM's own against itself)
+    failed = m1[m1["status"].str.contains("PoleError") & (m1["level"] == "seed")]
+    assert failed[["rmse_A_norm", "max_theta_A", "rmse_mu"]].isna().all().all()
+    pred = pd.read_csv(out / "predictions.csv")
+    assert set(pred.loc[pred["case"].isin(failed["case"]), "source"]) == {"dem", "model2"}
 
 
 def test_in_sample_flag_follows_the_training_cases_and_protocols(tmp_path, params_file):

@@ -4,7 +4,8 @@
 # power.csv: seeds (and DEM volume, core-hours) needed to decide claims 4 and 7 at
 # 95 % with 80 % power, with whether the paper (and bulk) preset reach it.
 # Reads every calibration set's predictions.csv and errors.csv (the model comparisons
-# use only runs a set was not calibrated on), the DEM series, and set "all"'s Eq. 2
+# use only runs a set was not calibrated on), the DEM series of every protocol (each
+# reversal of a schedule is one run of its kind), and set "all"'s Eq. 2
 # (and its freeform.csv with calibration.freeform: claims 9 and 10, the free-form upper bound).
 # Optional config keys under `claims:` (all have defaults):
 #   resamples: bootstrap resamples (2000)
@@ -53,6 +54,7 @@ rule claims:
         ),
     params:
         dirs=[case_dir(label) for label in CASES],
+        protocols=PROTOCOLS,
         sets=list(CALIBRATION_SETS),
         resamples=CLAIMS_RESAMPLES,
         presets=" ".join(f"{name}={path}" for name, path in CLAIMS_PRESETS.items()),
@@ -66,7 +68,8 @@ rule claims:
         f"{RESULTS}/benchmarks/claims/claims.tsv"
     threads: 1
     shell:
-        "{PY} -m claims --compare {COMPARE} --dem {params.dirs} --calibration {input.params}"
+        "{PY} -m claims --compare {COMPARE} --dem {params.dirs} --protocols {params.protocols}"
+        " --calibration {input.params}"
         " --sets {params.sets} --resamples {params.resamples} --preset {params.presets} {params.freeform}"
         " --out {CLAIMS} > {log} 2>&1"
 

@@ -1,14 +1,32 @@
 # The comparison stage: the continuum models against the DEM (python -m compare,
 # see compare/README.md), outputs under {RESULTS}/compare/.
-# Per calibration set: Model 1 and Model 2 integrated on every DEM run's own
-# imposed history from its pre-reversal fabric -> errors, claims, Fig. 4 / Fig. 5.
+# Per calibration set: Model 1 and Model 2 integrated on every reversal of every DEM
+# run (every protocol: a schedule's reversals too) on its own imposed history from
+# its pre-reversal fabric -> errors, claims, Fig. 4 (every Heaviside step) / Fig. 5
+# (every half cosine).
 # Across sets: in-sample against out-of-sample errors. For one set: sensitivity.
 # Optional config keys under `compare:` (all have defaults):
 #   sensitivity_set: calibration set whose parameters are perturbed ("all")
 #   options: extra options of `compare predict` (e.g. "--zoom 0.05")
 
+from campaign.preflight import protocol_segments
+from dem_contract.derived import reversal_kinds
+
 COMPARE = f"{RESULTS}/compare"
+# reversal kind -> its figure: every reversal of that kind (a Heaviside step, a half cosine) of every protocol
 COMPARE_FIGURES = {"heaviside": "fig4_heaviside", "sinusoidal": "fig5_sinusoidal"}
+
+
+def protocol_kinds(protocols):
+    """The reversal kinds the protocols hold (a schedule's from its segments), in COMPARE_FIGURES order."""
+    kinds = set()
+    for name in protocols:
+        segs = protocol_segments(name, config["protocols"][name])
+        kinds |= {k["kind"] for k in reversal_kinds({"segments": segs}, name)} if segs else set()
+    return [k for k in COMPARE_FIGURES if k in kinds]
+
+
+COMPARE_KINDS = protocol_kinds(PROTOCOLS)
 COMPARE_TABLES = ["errors", "claims"]
 COMPARE_CATEGORY = "Models against the DEM"
 SENSITIVITY_SET = config.get("compare", {}).get("sensitivity_set", "all")
@@ -40,12 +58,12 @@ rule compare_predict:
                 category=COMPARE_CATEGORY,
                 subcategory="{calset}",
             )
-            for proto in PROTOCOLS
-            if proto in COMPARE_FIGURES
+            for proto in COMPARE_KINDS
         ],
     params:
         dirs=[case_dir(label) for label in CASES],
-        protocols=[p for p in PROTOCOLS if p in COMPARE_FIGURES],
+        protocols=PROTOCOLS,
+        kinds=COMPARE_KINDS,
         train_cases=lambda wc: CALIBRATION_SETS[wc.calset]["cases"],
         train_protocols=lambda wc: CALIBRATION_SETS[wc.calset]["protocols"],
         out=lambda wc: f"{COMPARE}/{wc.calset}",
@@ -61,7 +79,8 @@ rule compare_predict:
     shell:
         "{PY} -m compare predict --dem {params.dirs} --params {input.params} --set {wildcards.calset}"
         " --protocols {params.protocols} --train-cases {params.train_cases}"
-        " --train-protocols {params.train_protocols} --out {params.out} {params.options} > {log} 2>&1"
+        " --train-protocols {params.train_protocols} --figures {params.kinds} --out {params.out} {params.options}"
+        " > {log} 2>&1"
 
 
 rule compare_heldout:
@@ -125,9 +144,7 @@ def compare_targets():
     for calset in CALIBRATION_SETS:
         targets.append(f"{COMPARE}/{calset}/predictions.csv")
         targets += [f"{COMPARE}/{calset}/{name}.csv" for name in COMPARE_TABLES]
-        targets += [
-            f"{COMPARE}/{calset}/{COMPARE_FIGURES[p]}.png" for p in PROTOCOLS if p in COMPARE_FIGURES
-        ]
+        targets += [f"{COMPARE}/{calset}/{COMPARE_FIGURES[k]}.png" for k in COMPARE_KINDS]
     targets.append(f"{COMPARE}/heldout_errors.csv")
     if SENSITIVITY_SET in CALIBRATION_SETS:
         targets += rules.compare_sensitivity.output
