@@ -52,6 +52,7 @@ import numpy as np
 import pandas as pd
 from scipy.optimize import least_squares
 
+from claims.measures import early_rmse
 from claims.stats import mean_interval
 from dem_contract import angle_difference, fabric_angle_deg, fabric_norm
 from model import params_from_dict
@@ -185,13 +186,16 @@ def reversal_strain(replay) -> float:
 
 
 def run_errors(c, replay, early_strain: float) -> dict:
-    """RMS errors of one run's model curve ``c`` (a, b, signed mu at the samples) against its DEM samples."""
-    dA = fabric_norm(c[:, 0], c[:, 1]) - fabric_norm(replay.a, replay.b)
+    """RMS errors of one run's model curve ``c`` (a, b, signed mu at the samples) against its DEM samples.
+
+    ``early_A_norm``: |A| over the first ``early_strain`` after the run's first reversal, the claims'
+    measure (``claims.measures.early_rmse``); the others over the whole run.
+    """
+    model_A, dem_A = fabric_norm(c[:, 0], c[:, 1]), fabric_norm(replay.a, replay.b)
     dth = angle_difference(fabric_angle_deg(c[:, 0], c[:, 1]), fabric_angle_deg(replay.a, replay.b))
-    s_rev = reversal_strain(replay)
-    early = (replay.s > s_rev) & (replay.s <= s_rev + early_strain)
     rms = lambda v: float(np.sqrt(np.mean(v**2))) if v.size else math.nan  # noqa: E731
-    return {"early_A_norm": rms(dA[early]), "A_norm": rms(dA), "theta_A": rms(dth), "mu": rms(c[:, 2] - replay.mu)}
+    early = early_rmse(replay.s, dem_A, model_A, early_strain, start=reversal_strain(replay))
+    return {"early_A_norm": early, "A_norm": rms(model_A - dem_A), "theta_A": rms(dth), "mu": rms(c[:, 2] - replay.mu)}
 
 
 def _heldout(items, held, s2, sigma_mu, early_strain) -> list:

@@ -54,7 +54,7 @@ import pandas as pd
 import yaml
 from scipy import stats
 
-from dem_contract import REVERSAL_PROTOCOLS, DEMInputError, read_series
+from dem_contract import REVERSAL_PROTOCOLS, DEMInputError, read_series, stage_costs
 
 from . import measures, table
 
@@ -148,18 +148,18 @@ def _mean(values) -> float:
 
 
 def dem_cost(case_dirs, protocols) -> dict:
-    """Disks and CPU seconds per case from the stage sidecars (``N``, ``cpu_time_s``): means over the cases.
+    """Disks and CPU seconds per case from the stage sidecars (``dem_contract.stage_costs``): means over the cases.
 
     Returns ``disks``, ``setup_cpu_s`` (packing and pre-shear), ``transient_cpu_s`` (one reversal run), NaN
-    where the sidecars do not say (model-made cases), and ``geometry`` (``H_over_d``, ``W_over_H`` of the
-    first case's scene.json, or None).
+    where the sidecars do not say (model-made cases; the means skip NaN), and ``geometry`` (``H_over_d``,
+    ``W_over_H`` of the first case's scene.json, or None).
     """
     disks, setup, transient, geometry = [], [], [], None
     for d in map(Path, case_dirs):
-        side = {st: _sidecar(d / f"{st}.json") for st in (*STAGES, *protocols) if (d / f"{st}.json").exists()}
-        disks.append(side.get("preshear", {}).get("N", math.nan))
-        setup.append(sum(side.get(st, {}).get("cpu_time_s", math.nan) for st in STAGES))
-        transient += [side[p].get("cpu_time_s", math.nan) for p in protocols if p in side]
+        cost = stage_costs(d, (*STAGES, *protocols), keys=("cpu_time_s",), missing="nan")
+        disks.append(cost["N"])
+        setup.append(sum(cost[f"cpu_time_{st}_s"] for st in STAGES))
+        transient += [cost[f"cpu_time_{p}_s"] for p in protocols]
         if geometry is None and (d / "scene.json").exists():
             geometry = _sidecar(d / "scene.json").get("geometry")
     return {"disks": _mean(disks), "setup_cpu_s": _mean(setup), "transient_cpu_s": _mean(transient),

@@ -17,6 +17,7 @@ imports ``dem_contract``).
 ``dem_contract.synthetic`` (it needs ``model``) writes model-made cases in the
 same layout, for tests and trial runs.
 """
+from .costs import COST_KEYS, stage_costs
 from .derived import (MIN_PRE_REVERSAL_SAMPLES, PRE_REVERSAL_WINDOW, STEADY_FRACTION, angle_difference, axial_mean,
                       Transient, fabric_angle_deg, fabric_norm, pre_reversal_state, reversal_indices,
                       reversal_times, split_transients, steady_values, steady_window)
@@ -27,4 +28,4 @@ __all__ = ["CONTRACT_COLUMNS", "REVERSAL_PROTOCOLS", "DEMInputError", "read_seri
            "LABEL_RE", "case_label", "parse_case_label", "split_case_label",
            "STEADY_FRACTION", "PRE_REVERSAL_WINDOW", "MIN_PRE_REVERSAL_SAMPLES", "steady_window", "steady_values",
            "fabric_norm", "fabric_angle_deg", "axial_mean", "angle_difference", "reversal_indices",
-           "pre_reversal_state", "Transient", "reversal_times", "split_transients"]
+           "pre_reversal_state", "Transient", "reversal_times", "split_transients", "COST_KEYS", "stage_costs"]

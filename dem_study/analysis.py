@@ -38,7 +38,7 @@ import pandas as pd
 from scipy import stats
 
 from dem_contract import (DEMInputError, angle_difference, axial_mean, fabric_angle_deg, fabric_norm, read_series,
-                          read_sidecar, steady_values)
+                          read_sidecar, stage_costs, steady_values)
 
 from .grid import AXES, REPEAT_PREFIX
 
@@ -125,32 +125,32 @@ class PointResult:
 def load_point(case_dir: Path, point: str, steady_window: float, edges: np.ndarray) -> PointResult:
     case_dir = Path(case_dir)
     try:
+        # wall time and steps per stage: every sidecar must exist and record them
+        costs = stage_costs(case_dir, STAGES, keys=("wall_time_s", "steps"), missing="raise")
         sidecars = {s: read_sidecar(case_dir / f"{s}.csv") for s in STAGES}
-        missing = [s for s, side in sidecars.items() if not side]
-        if missing:
-            raise DEMInputError(f"{case_dir / (missing[0] + '.json')}: file not found")
         pre = read_series(case_dir / "preshear.csv", COLUMNS["preshear"], what="the pre-shear of the point")
         rev = read_series(case_dir / "heaviside.csv", COLUMNS["heaviside"], what="the heaviside run of the point")
     except DEMInputError as e:
         raise StudyInputError(f"{point}: missing or bad output: {e}") from None
-    shear = [sidecars["preshear"], sidecars["heaviside"]]
-    shear_wall = sum(s["wall_time_s"] for s in shear)
-    shear_psteps = sum(s["particle_steps_per_s"] * s["wall_time_s"] for s in shear)
-    strain = sum(abs(s["strain_end"] - s["strain_start"]) for s in shear)
+    # CPU time (immune to other jobs on the machine) and the share of it spent sampling,
+    # where the sidecars record them (yade_scripts since the sampler-CPU change); NaN otherwise
+    cpu = stage_costs(case_dir, STAGES, keys=("cpu_time_s",), missing="nan")
+    shear = ("preshear", "heaviside")
+    shear_wall = sum(costs[f"wall_time_{s}_s"] for s in shear)
+    shear_psteps = sum(sidecars[s]["particle_steps_per_s"] * costs[f"wall_time_{s}_s"] for s in shear)
+    strain = sum(abs(sidecars[s]["strain_end"] - sidecars[s]["strain_start"]) for s in shear)
+    sampler = {s: sidecars[s].get("sampler_cpu_s", np.nan) for s in shear}
     cost = {
-        "N": int(sidecars["preshear"]["N"]),
-        "steps_shear": int(sum(s["steps"] for s in shear)),
-        "wall_time_s": float(sum(s["wall_time_s"] for s in sidecars.values())),
-        "wall_time_pack_s": float(sidecars["pack"]["wall_time_s"]),
+        "N": costs["N"],
+        "steps_shear": sum(costs[f"steps_{s}"] for s in shear),
+        "wall_time_s": costs["wall_time_s"],
+        "wall_time_pack_s": costs["wall_time_pack_s"],
         "wall_time_shear_s": float(shear_wall),
         "wall_time_per_strain_s": float(shear_wall / strain),
         "particle_steps_per_s": float(shear_psteps / shear_wall),
         "kappa_achieved": float(sidecars["preshear"]["kappa_achieved"]),
-        # CPU time (immune to other jobs on the machine) and the share of it spent sampling,
-        # where the sidecars record them (yade_scripts since the sampler-CPU change); NaN otherwise
-        "cpu_time_s": float(sum(s.get("cpu_time_s", np.nan) for s in sidecars.values())),
-        "sampling_cost": float(sum(s.get("sampler_cpu_s", np.nan) for s in shear)
-                               / sum(s.get("cpu_time_s", np.nan) - s.get("sampler_cpu_s", np.nan) for s in shear)),
+        "cpu_time_s": cpu["cpu_time_s"],
+        "sampling_cost": float(sum(sampler.values()) / sum(cpu[f"cpu_time_{s}_s"] - sampler[s] for s in shear)),
     }
     rev_strain = sidecars["heaviside"].get("reversal_strain", sidecars["heaviside"]["strain_start"])
     return PointResult(point, steady_state(pre, steady_window),

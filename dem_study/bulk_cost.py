@@ -10,10 +10,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
 import pandas as pd
 
-from dem_contract import DEMInputError, read_sidecar
+from dem_contract import DEMInputError, stage_costs
 
 from .analysis import StudyInputError
 
@@ -21,21 +20,16 @@ STAGES = ("pack", "preshear", "heaviside")
 
 
 def case_cost(case_dir, stages=STAGES) -> dict:
-    """CPU and wall seconds per stage of one case (NaN where a sidecar lacks ``cpu_time_s``)."""
-    case_dir = Path(case_dir)
-    row = {}
-    for stage in stages:
-        try:
-            side = read_sidecar(case_dir / f"{stage}.csv")
-        except DEMInputError as exc:
-            raise StudyInputError(str(exc)) from None
-        if not side:
-            raise StudyInputError(f"{case_dir / (stage + '.json')}: file not found")
-        row["N"] = int(side["N"])
-        row[f"cpu_time_{stage}_s"] = float(side.get("cpu_time_s", np.nan))
-        row[f"wall_time_{stage}_s"] = float(side["wall_time_s"])
-    row["cpu_time_s"] = sum(row[f"cpu_time_{s}_s"] for s in stages)
-    row["wall_time_s"] = sum(row[f"wall_time_{s}_s"] for s in stages)
+    """CPU and wall seconds per stage of one case and their sums (``dem_contract.stage_costs``), and core-hours.
+
+    Every sidecar must exist and record ``N``, ``cpu_time_s`` and ``wall_time_s`` (the study's cases
+    are run by ``yade_scripts`` since the sidecars record the CPU time): else ``StudyInputError``
+    naming the file and the key.
+    """
+    try:
+        row = stage_costs(case_dir, stages, keys=("cpu_time_s", "wall_time_s"), missing="raise")
+    except DEMInputError as exc:
+        raise StudyInputError(str(exc)) from None
     row["core_hours"] = row["cpu_time_s"] / 3600
     return row
 

@@ -153,6 +153,31 @@ def test_cross_validation_picks_a_small_penalty_and_a_bend_for_a_strong_pole(mod
     assert bend["high"] < 0.0   # alpha1 falls toward the pole, as c1 < 0 makes it
 
 
+def test_early_score_is_the_claims_early_rmse_after_the_first_reversal_as_before(model2_truth):
+    """The free-form early |A| score (``run_errors``) is ``claims.measures.early_rmse``: the same numbers as
+    the former inline RMS over s_rev < s <= s_rev + early_strain, for runs reversed at once and after a lead."""
+    from dataclasses import replace
+
+    from calibrate import route2
+    from dem_contract import fabric_norm
+
+    d = model2_truth
+    curves = route2.curves([(params_from_dict(d["doc2"]), "model1", "eq2")], d["replays"], d["s2"])[0]
+    w = FAST.early_strain
+    checked = 0
+    for c, r in zip(curves, d["replays"]):
+        g_pre = -np.sign(r.A0[1])          # a lead sheared as the pre-shear was moves the reversal to 0.05
+        for rep in (r, replace(r, pieces=[(g_pre, 0.05), *r.pieces], s=r.s + 0.05)):
+            s_rev = freeform.reversal_strain(rep)
+            early = (rep.s > s_rev) & (rep.s <= s_rev + w)
+            dA = fabric_norm(c[:, 0], c[:, 1]) - fabric_norm(rep.a, rep.b)
+            former = float(np.sqrt(np.mean(dA[early] ** 2)))
+            assert early.sum() > 10 and former > 0.0
+            assert freeform.run_errors(c, rep, w)["early_A_norm"] == former
+            checked += 1
+    assert checked == 2 * len(d["replays"])
+
+
 def test_claims_table_gets_the_upper_bound_and_pole_rows_from_freeform_csv(model2_truth, tmp_path):
     from claims import inputs, table
 

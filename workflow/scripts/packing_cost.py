@@ -1,8 +1,9 @@
 """What the packing costs in a DEM campaign: one row per campaign, from the stage sidecars.
 
 Called by the Snakemake rule `packing_cost` (workflow/rules/accuracy.smk). For every case
-the sidecars ``<stage>.json`` give ``cpu_time_s`` and ``steps``; the case's DEM cost is the
-sum over its stages (pack, pre-shear, protocols), and the pack's fraction of it is
+the sidecars ``<stage>.json`` give ``cpu_time_s`` and ``steps`` (``dem_contract.stage_costs``: a
+missing sidecar or key is a ``DEMInputError``); the case's DEM cost is the sum over its stages
+(pack, pre-shear, protocols), and the pack's fraction of it is
 
     f_case = pack / (pack + preshear + sum of the protocols),
 
@@ -16,22 +17,10 @@ import pandas as pd
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2]))   # the repository (Snakemake sets __file__)
 
-from dem_contract import DEMInputError, read_sidecar  # noqa: E402
+from dem_contract import DEMInputError, stage_costs  # noqa: E402,F401 (DEMInputError: what stage_costs raises)
 
 #: The issue's target: the pack at most this fraction of a case's DEM time.
 TARGET_FRACTION = 0.10
-
-
-def case_costs(case_dir: Path, stages: list[str]) -> dict:
-    """CPU seconds and steps of each stage of one case, from its sidecars."""
-    out = {}
-    for stage in stages:
-        side = read_sidecar(Path(case_dir) / f"{stage}.csv")
-        missing = [k for k in ("cpu_time_s", "steps") if k not in side]
-        if missing:
-            raise DEMInputError(f"{Path(case_dir) / f'{stage}.json'}: sidecar missing or without {', '.join(missing)}")
-        out[stage] = (float(side["cpu_time_s"]), int(side["steps"]))
-    return out
 
 
 def packing_cost(campaign: str, case_dirs: list[Path], stages: list[str]) -> pd.DataFrame:
@@ -41,11 +30,10 @@ def packing_cost(campaign: str, case_dirs: list[Path], stages: list[str]) -> pd.
         raise ValueError(f"stages {stages} must include pack")
     rows = []
     for d in case_dirs:
-        c = case_costs(d, stages)
-        cpu = sum(v[0] for v in c.values())
-        steps = sum(v[1] for v in c.values())
-        rows.append(dict(pack_cpu=c["pack"][0], pack_steps=c["pack"][1], case_cpu=cpu, case_steps=steps,
-                         f_cpu=c["pack"][0] / cpu, f_steps=c["pack"][1] / steps))
+        c = stage_costs(d, stages, keys=("cpu_time_s", "steps"), missing="raise")
+        rows.append(dict(pack_cpu=c["cpu_time_pack_s"], pack_steps=c["steps_pack"], case_cpu=c["cpu_time_s"],
+                         case_steps=c["steps"], f_cpu=c["cpu_time_pack_s"] / c["cpu_time_s"],
+                         f_steps=c["steps_pack"] / c["steps"]))
     t = pd.DataFrame(rows)
     return pd.DataFrame([dict(
         campaign=campaign, n_cases=len(t), stages="+".join(stages),

@@ -13,7 +13,7 @@ import pandas as pd
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2]))   # the repository (Snakemake sets __file__)
 
-from dem_contract import DEMInputError, read_series, read_sidecar, steady_values, steady_window  # noqa: E402
+from dem_contract import read_series, read_sidecar, stage_costs, steady_values, steady_window  # noqa: E402
 
 #: The pre-shear columns the summary averages.
 SUMMARY_COLUMNS = ("t", "strain", "A_xx", "A_xy", "mu", "phi", "Z")
@@ -34,17 +34,14 @@ def steady_row(series: pd.DataFrame) -> dict:
 
 
 def case_row(label: str, case: dict, case_dir: Path, stages: list[str]) -> dict:
-    sidecars = {}
-    for stage in stages:
-        sidecars[stage] = read_sidecar(case_dir / f"{stage}.csv")
-        if not sidecars[stage]:
-            raise DEMInputError(f"{case_dir / f'{stage}.json'}: sidecar not found")
-    pre = sidecars["preshear"]
-    row = {"case": label, **case, "N": pre["N"], "kappa_achieved": pre["kappa_achieved"],
+    """The case's row: its stage costs (``dem_contract.stage_costs``), the pre-shear's sidecar and steady values."""
+    cost = stage_costs(case_dir, stages, keys=("wall_time_s", "steps"), missing="raise")
+    pre = read_sidecar(case_dir / "preshear.csv")
+    row = {"case": label, **case, "N": cost["N"], "kappa_achieved": pre["kappa_achieved"],
            "inertial_number_achieved": pre["inertial_number_achieved"],
-           "dt_over_tc": pre["dt_over_tc"], "steps_preshear": pre["steps"]}
-    for stage, side in sidecars.items():
-        row[f"wall_time_s_{stage}"] = side["wall_time_s"]
+           "dt_over_tc": pre["dt_over_tc"], "steps_preshear": cost["steps_preshear"]}
+    for stage in stages:
+        row[f"wall_time_s_{stage}"] = cost[f"wall_time_{stage}_s"]
     row["particle_steps_per_s"] = pre["particle_steps_per_s"]
     row.update(steady_row(read_series(case_dir / "preshear.csv", SUMMARY_COLUMNS, what="the pre-shear of the case")))
     return row
