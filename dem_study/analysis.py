@@ -39,6 +39,7 @@ from scipy import stats
 
 from dem_contract import (DEMInputError, angle_difference, axial_mean, fabric_angle_deg, fabric_norm, read_series,
                           read_sidecar, stage_costs, steady_values)
+from dem_contract.derived import mirror_reversal
 
 from .grid import AXES, REPEAT_PREFIX
 
@@ -73,9 +74,9 @@ def transient_curves(reversal: pd.DataFrame, reversal_strain: float, edges: np.n
 
     ``direction``: the sign of the shear after the reversal relative to the pre-shear's
     (-1: against it, the Heaviside run; +1: a train's reversal back along it). The
-    strain since the reversal is ``direction (strain - reversal_strain)``, and a +1
-    reversal is mirrored (x -> -x: ``A_xy -> -A_xy``, theta_A -> 180 deg - theta_A) into
-    the frame of a -1 one, so every transient starts from the same steady fabric.
+    +1 reversal is mirrored (``dem_contract.derived.mirror_reversal``, x -> -x:
+    strain and ``A_xy`` change sign, theta_A -> 180 deg - theta_A) into the frame of a
+    -1 one, so every transient starts from the same steady fabric.
 
     Each column (mu, A_xx, A_xy) is linearly interpolated between its samples
     onto ``sub`` points per bin and averaged over each bin; |A| and theta_A come
@@ -84,7 +85,9 @@ def transient_curves(reversal: pd.DataFrame, reversal_strain: float, edges: np.n
     so every sampling interval lands on the same grid without a half-interval
     shift. Before the first sample the first value is held.
     """
-    x = direction * (reversal["strain"].to_numpy() - reversal_strain)   # strain travelled since the reversal
+    if direction > 0:   # into the frame of a reversal against the pre-shear
+        reversal, reversal_strain = mirror_reversal(reversal), -reversal_strain
+    x = reversal_strain - reversal["strain"].to_numpy()   # strain falls after the reversal
     order = np.argsort(x)
     x = x[order]
     if len(x) < 2:
@@ -93,9 +96,8 @@ def transient_curves(reversal: pd.DataFrame, reversal_strain: float, edges: np.n
     widths = np.diff(edges)
     fine = (edges[:-1, None] + (np.arange(sub)[None, :] + 0.5) / sub * widths[:, None]).ravel()
     out = {}
-    mirror = {"mu": 1.0, "A_xx": 1.0, "A_xy": -float(np.sign(direction))}
     for col in ("mu", "A_xx", "A_xy"):
-        v = mirror[col] * reversal[col].to_numpy()[order]
+        v = reversal[col].to_numpy()[order]
         out[col] = np.interp(fine, x, v).reshape(len(centres), sub).mean(axis=1)
     return pd.DataFrame({"strain_since_reversal": centres, "mu": out["mu"],
                          "A_norm": fabric_norm(out["A_xx"], out["A_xy"]),
