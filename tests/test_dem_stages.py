@@ -256,6 +256,12 @@ def test_packing_cost_is_the_pack_share_of_the_case_sidecars(case, tmp_path):
         pc.packing_cost("tiny", [case["dir"], other], stages)
 
 
+def test_packing_cost_orders_the_stages_of_a_campaign_with_a_reversal_schedule():
+    pc = _packing_cost_module()
+    paths = [f"r/dem/c{k}/{s}.json" for k in (1, 2) for s in ("sinusoidal", "alternate", "preshear", "pack")]
+    assert pc.stage_order(paths) == ["pack", "preshear", "sinusoidal", "alternate"]
+
+
 def test_same_seed_same_packing(tmp_path):
     sc = make_scene()
     sc["geometry"].update(H_over_d=5, W_over_H=2)

@@ -46,9 +46,15 @@ def packing_cost(campaign: str, case_dirs: list[Path], stages: list[str]) -> pd.
         within_target=bool(np.all(t[["f_cpu", "f_steps"]].to_numpy() <= TARGET_FRACTION)))])
 
 
+def stage_order(sidecars) -> list[str]:
+    """The stages of the sidecar paths: pack and preshear first, then the protocols in their order
+    (heaviside, sinusoidal or any reversal schedule's name)."""
+    names = list(dict.fromkeys(Path(p).stem for p in sidecars))
+    return [s for s in ("pack", "preshear") if s in names] + [s for s in names if s not in ("pack", "preshear")]
+
+
 def main(snakemake):
-    stages = sorted({Path(p).stem for p in snakemake.input.sidecars},
-                    key=["pack", "preshear", "heaviside", "sinusoidal"].index)
+    stages = stage_order(snakemake.input.sidecars)
     case_dirs = sorted({Path(p).parent for p in snakemake.input.sidecars})
     table = packing_cost(snakemake.params.campaign, case_dirs, stages)
     table.to_csv(snakemake.output[0], index=False, float_format="%.6g")
