@@ -32,6 +32,7 @@ def test_cases_cover_every_pressure_rate_and_seed_under_parseable_labels():
 def test_wall_velocities_become_inertial_numbers_with_the_nominal_gap():
     # I = (2U/H) d / sqrt(p/rho): H = 12 mm, U = 0.06 m/s, sqrt(1e5/2500) = 6.3246 m/s -> I = 1.581e-3
     config = copy.deepcopy(QUICK)
+    config["cell"]["H_over_d"] = 12
     config["loading"] = {"pressures": [1e5], "wall_velocities": [0.06]}
     (case, *_) = cases(config).values()
     assert case["inertial_number"] == pytest.approx(2 * 0.06 / 12e-3 * 1e-3 / 6.32455532, rel=1e-6)
