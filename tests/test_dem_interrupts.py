@@ -158,7 +158,8 @@ def test_rerun_while_an_orphan_runs_is_refused_and_the_orphan_completes(packed, 
         assert rerun.returncode == 5, rerun.stdout[-1000:] + rerun.stderr[-1000:]
         assert f"being run by PID {orphan} on host" in rerun.stderr
         t0 = time.time()
-        while lock.exists():  # the orphan is not our child: wait for it to let go of the stage
+        # the orphan is not our child: wait for it to exit (it unlinks the lock, then removes .partial/)
+        while lock.exists() or os.path.exists(f"/proc/{orphan}"):
             assert time.time() - t0 < 120
             time.sleep(0.1)
     finally:
