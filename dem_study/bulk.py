@@ -97,23 +97,16 @@ def load_case(case_dir, case: str, steady_window: float, edges: np.ndarray, stag
     steady = {"mu": st["mu"], "A_norm": st["A_norm"], "theta_A_deg": st["theta_A"], "phi": st["phi"], "Z": st["Z"]}
     pre_sign = float(np.sign(np.median(pre["gammadot"])))
     each = [transient_curves(tr.data, tr.strain0, edges, direction=tr.sign * pre_sign) for tr in transients]
-    return CaseResult(case, steady, each[0] if len(each) == 1 else _mean_of(each), cost, each)
+    curve = each[0] if len(each) == 1 else mean_curves(each)[["strain_since_reversal", *TRANSIENT]]
+    return CaseResult(case, steady, curve, cost, each)
 
 
-def _mean_of(curves: list) -> pd.DataFrame:
-    """Bin-wise mean of transient curves (theta_A on the circle of axial angles)."""
+def mean_curves(curves: list) -> pd.DataFrame:
+    """Bin-wise mean of transient curves with the standard error per bin: ``<q>``, ``<q>_se``
+    (theta_A on the circle of axial angles): a cell's seed mean, or a seed's train mean."""
     out = {"strain_since_reversal": curves[0]["strain_since_reversal"].to_numpy()}
     for q in TRANSIENT:
         stack = np.stack([c[q].to_numpy() for c in curves])
-        out[q] = np.array([_mean_and_se(stack[:, j], q in AXIAL)[0] for j in range(stack.shape[1])])
-    return pd.DataFrame(out)
-
-
-def mean_curves(results: list[CaseResult]) -> pd.DataFrame:
-    """Seed-mean transient of one cell with the standard error per bin: ``<q>``, ``<q>_se``."""
-    out = {"strain_since_reversal": results[0].curves["strain_since_reversal"].to_numpy()}
-    for q in TRANSIENT:
-        stack = np.stack([r.curves[q].to_numpy() for r in results])
         ms = [_mean_and_se(stack[:, j], q in AXIAL) for j in range(stack.shape[1])]
         out[q] = np.array([m for m, _ in ms])
         out[f"{q}_se"] = np.array([s for _, s in ms])
@@ -141,13 +134,13 @@ def cell_table(cases: pd.DataFrame, results: dict[str, CaseResult], early_strain
         row["transients"] = sum(len(r.transients) for r in res)
         for q in STEADY:
             row[q], row[f"{q}_se"] = _mean_and_se(np.array([r.steady[q] for r in res]), q in AXIAL)
-        curves[cell] = c = mean_curves(res)
+        curves[cell] = c = mean_curves([r.curves for r in res])
+        pooled = mean_curves([t for r in res for t in r.transients])   # every transient as if independent
         early = c["strain_since_reversal"] < early_strain
         for q in INFORMATION:
             se = float(np.sqrt(np.mean(np.square(c.loc[early, f"{q}_se"])))) if early.any() else np.nan
             row[f"early_se_{q}"] = se
             row[f"info_{q}"] = 1.0 / (se**2 * row["core_hours"]) if se > 0 else np.nan
-            pooled = mean_curves([CaseResult("", {}, c, {}) for r in res for c in r.transients])
             se_p = float(np.sqrt(np.mean(np.square(pooled.loc[early, f"{q}_se"])))) if early.any() else np.nan
             row[f"early_se_pooled_{q}"] = se_p
             row[f"design_effect_{q}"] = (se / se_p) ** 2 if se_p > 0 else np.nan
