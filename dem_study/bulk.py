@@ -58,7 +58,7 @@ import pandas as pd
 from dem_contract import DEMInputError, angle_difference, read_series, read_sidecar, split_transients, steady_values
 
 from .analysis import StudyInputError, _mean_and_se, transient_curves
-from .bulk_cost import STAGES, case_cost
+from .bulk_cost import STAGES, case_cost, reversal_stages
 
 STEADY = ("mu", "A_norm", "theta_A_deg", "phi", "Z")
 TRANSIENT = ("mu", "A_norm", "theta_A_deg")
@@ -210,8 +210,8 @@ def comparison(cells: pd.DataFrame, curves: dict, references, tall: str | None, 
 def analyse(cases: pd.DataFrame, bulk_dir, steady_window: float, edges: np.ndarray, early_strain: float,
             references, tall: str | None, match_se: float = 2.0):
     """Load every case of ``cases`` under ``bulk_dir``; returns (comparison table, cell table, curves)."""
-    stages = cases["stage"] if "stage" in cases else ["heaviside"] * len(cases)
-    results = {c: load_case(Path(bulk_dir) / c, c, steady_window, edges, st) for c, st in zip(cases["case"], stages)}
+    results = {c: load_case(Path(bulk_dir) / c, c, steady_window, edges, st)
+               for c, st in zip(cases["case"], reversal_stages(cases))}
     cells, curves = cell_table(cases, results, early_strain)
     return comparison(cells, curves, references, tall, match_se), cells, curves
 

@@ -34,9 +34,14 @@ def case_cost(case_dir, stages=STAGES) -> dict:
     return row
 
 
+def reversal_stages(cases: pd.DataFrame) -> list:
+    """Each case's reversal stage: the cases table's ``stage`` (heaviside or train), heaviside in
+    a table written before reversal trains existed."""
+    return list(cases["stage"]) if "stage" in cases else ["heaviside"] * len(cases)
+
+
 def cost_table(cases: pd.DataFrame, bulk_dir) -> pd.DataFrame:
     """``cases`` (``bulk_cells.cases``: case, cell, seed, ...) with each case's cost columns."""
-    stages = cases["stage"] if "stage" in cases else ["heaviside"] * len(cases)
     costs = pd.DataFrame([case_cost(Path(bulk_dir) / case, (*STAGES[:2], stage))
-                          for case, stage in zip(cases["case"], stages)], index=cases.index)
+                          for case, stage in zip(cases["case"], reversal_stages(cases))], index=cases.index)
     return pd.concat([cases.drop(columns=["N"], errors="ignore"), costs], axis=1)
