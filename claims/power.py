@@ -56,11 +56,11 @@ from scipy import stats
 
 from dem_contract import REVERSAL_PROTOCOLS, DEMInputError, read_series, stage_costs
 
-from . import measures, table
+from . import margins, table
 
 ALPHA = 0.05
 POWER = 0.8
-MIN_EFFECT_FRACTION = 0.05
+MIN_EFFECT_FRACTION = margins.FALL_FRACTION   # the minimal effect is the claim's margin
 EFFECTS = ("measured", "minimal")
 COMPARED = (("4", "A_norm", "|A|", table.EARLY_A), ("7", "mu", "mu", table.EARLY_MU))
 N_MAX = 10**7     # seeds beyond this are reported as infinite
@@ -125,13 +125,7 @@ def scaled_sd(sd0: float, disks0: float, transients0: float, disks: float, trans
 # --------------------------------------------------------------------------- what the campaign measured
 
 
-def fall_size(pairs, column: str) -> float:
-    r"""Mean over the scored runs of the DEM fall :math:`\bar x(0) - \min_s \bar x(s)` (running mean ``measures.SMOOTH``)."""
-    sizes = []
-    for _, cur in pairs:
-        x = measures.smooth(cur["dem"][column].to_numpy())
-        sizes.append(float(x[0] - np.nanmin(x)))
-    return _mean(sizes)
+fall_size = margins.fall_size
 
 
 def _sidecar(path) -> dict:

@@ -4,12 +4,18 @@ Columns (``COLUMNS``): ``claim_id``, ``claim`` (the paper's words, shortened),
 ``source`` (the paper's section or figure), ``statistic`` (what is measured),
 ``unit``, ``null`` (the value of no effect), ``paper_side`` (``>`` or ``<``:
 where the paper puts the statistic), ``estimate``, ``low``, ``high`` (95 %
-interval), ``test``, ``n`` and ``n_unit`` (what was counted), ``verdict`` and
-``detail`` (the numbers behind it).
+interval), ``margin`` (the smallest effect that matters, ``claims.margins``;
+NaN where the claim compares no two models), ``eq_low``, ``eq_high`` (the
+90 % equivalence interval: two one-sided tests at 5 %), ``sd`` (the
+seed-to-seed standard deviation of the per-seed values: the planner's input),
+``test``, ``n`` and ``n_unit`` (what was counted), ``verdict`` and ``detail``
+(the numbers behind it).
 
 Decision rule (``claims.stats.verdict``): **reproduced** if the 95 % interval
 lies strictly on the paper's side of the null, **contradicted** if strictly on
-the other side, **inconclusive** otherwise (also when it cannot be computed).
+the other side, **negligible** if the equivalence interval lies inside
+null +- margin (with the first two: "reproduced, negligible", a real effect too
+small to matter), **inconclusive** otherwise (also when it cannot be computed).
 The one addition: "theta_A *always* passes through 90 degrees" is also
 contradicted by a single run that clearly crosses the horizontal.
 
@@ -37,10 +43,10 @@ import pandas as pd
 
 from model import friction_eq2, load_params
 
-from . import measures, stats
+from . import margins, measures, stats
 
 COLUMNS = ["claim_id", "claim", "source", "statistic", "unit", "null", "paper_side", "estimate", "low", "high",
-           "test", "n", "n_unit", "verdict", "detail"]
+           "margin", "eq_low", "eq_high", "sd", "test", "n", "n_unit", "verdict", "detail"]
 MODELS = ("model1", "model2")
 EARLY_A = 0.1      # strain window of the fall of |A| (the paper: "just after the reversal")
 EARLY_MU = 0.05    # strain window of the start of the reversal for mu
@@ -50,10 +56,18 @@ SEED_UNIT = "seeds (pooled across ensembles)"
 
 
 def _row(claim_id, claim, source, statistic, unit, null, side, est, low, high, test, n, n_unit, detail,
-         verdict=None):
+         verdict=None, margin=math.nan, eq=(math.nan, math.nan), sd=math.nan):
     return dict(claim_id=claim_id, claim=claim, source=source, statistic=statistic, unit=unit, null=null,
-                paper_side=side, estimate=est, low=low, high=high, test=test, n=n, n_unit=n_unit,
-                verdict=verdict or stats.verdict(low, high, null, side), detail=detail)
+                paper_side=side, estimate=est, low=low, high=high, margin=margin, eq_low=eq[0], eq_high=eq[1],
+                sd=sd, test=test, n=n, n_unit=n_unit,
+                verdict=verdict or stats.verdict(low, high, null, side, eq[0], eq[1], margin), detail=detail)
+
+
+def _spread(boot, values) -> dict:
+    """The equivalence interval (``eq``) and seed-to-seed s.d. (``sd``) of per-seed values, as ``_row`` takes them."""
+    v = np.asarray(values, float)
+    v = v[np.isfinite(v)]
+    return dict(eq=boot.equivalence(v), sd=float(np.std(v, ddof=1)) if v.size >= 2 else math.nan)
 
 
 def _per_seed(values: dict) -> tuple:
@@ -128,7 +142,7 @@ def fall_rows(dem: dict, steady: dict, boot) -> list:
             "fraction of the steady value", 0.0, ">", est, lo, hi, stats.bootstrap_test_name(boot.n_resamples), n,
             SEED_UNIT,
             f"mean depth {_fmt(np.mean(dd) if dd.size else math.nan)}; strain of the minimum {_fmt(sm_est)} "
-            f"[{_fmt(sm_lo)}, {_fmt(sm_hi)}] (strain since the reversal)"))
+            f"[{_fmt(sm_lo)}, {_fmt(sm_hi)}] (strain since the reversal)", sd=_spread(boot, e)["sd"]))
     return rows
 
 
@@ -154,7 +168,8 @@ def collapse_rows(dem_cases: list, eq2, boot) -> list:
         f"bins) over the RMS scatter of sigma_xy/p about its best single-valued curve of A_xy (Fig. 2a's axes); "
         f"reversal runs, raw DEM samples", "ratio", 1.0, "<", est, lo, hi,
         stats.bootstrap_test_name(boot.n_resamples), n, SEED_UNIT,
-        f"mean scatter of mu about the curve of X: {_fmt(np.mean(r_x) if r_x else math.nan)}"))
+        f"mean scatter of mu about the curve of X: {_fmt(np.mean(r_x) if r_x else math.nan)}",
+        sd=_spread(boot, ratio_axy)["sd"]))
     if eq2 is None:
         rows.append(_row("2b", "Eq. 2 captures mu(X)", "the paper, Sec. 3.1 (Eq. 2, Fig. 2b)",
                          "not computed: no params.yaml of calibration set 'all'", "ratio", EQ2_MARGIN, "<",
@@ -165,7 +180,7 @@ def collapse_rows(dem_cases: list, eq2, boot) -> list:
         "2b", "Eq. 2 captures mu(X) (as well as any single-valued curve of X)", "the paper, Sec. 3.1 (Eq. 2, Fig. 2b)",
         f"per seed, RMS scatter of mu about Eq. 2 (calibration set 'all') over its scatter about the best "
         f"single-valued curve of X; null: within {EQ2_MARGIN - 1:.0%}", "ratio", EQ2_MARGIN, "<", est, lo, hi,
-        stats.bootstrap_test_name(boot.n_resamples), n, SEED_UNIT, ""))
+        stats.bootstrap_test_name(boot.n_resamples), n, SEED_UNIT, "", sd=_spread(boot, ratio_eq2)["sd"]))
     return rows
 
 
@@ -201,7 +216,8 @@ def steady_angle_row(steady: dict, boot) -> dict:
         "mean over seeds of the pre-shear's steady theta_A (last half of its strain, mirrored to positive shear); "
         "Eq. 4 with alpha2 < 0 has no steady state above 135 degrees", "degrees", STEADY_LIMIT, "<", est, lo, hi,
         stats.bootstrap_test_name(boot.n_resamples), n, SEED_UNIT,
-        f"seeds above 135 degrees: {', '.join(above) if above else 'none'}")
+        f"seeds above 135 degrees: {', '.join(above) if above else 'none'}; margin: "
+        f"{margins.STEADY_ANGLE_DEG:g} degree", margin=margins.STEADY_ANGLE_DEG, **_spread(boot, th))
 
 
 # --------------------------------------------------------------------------- model comparisons (out of sample)
@@ -257,6 +273,7 @@ def early_error_row(runs, claim_id, claim, source, column, label, window, boot) 
     diffs, r, pairs, missing = early_error_differences(runs, column, window)
     _, v = _per_seed(diffs)
     est, lo, hi, n = boot(v)
+    margin = margins.fall_margin(pairs, column)
     return _row(
         claim_id, claim, source,
         f"RMSE of {label} over the first {window:g} strain after the reversal, Model 1 minus Model 2, out of "
@@ -264,7 +281,9 @@ def early_error_row(runs, claim_id, claim, source, column, label, window, boot) 
         est, lo, hi,
         "paired " + stats.bootstrap_test_name(boot.n_resamples), n, SEED_UNIT,
         f"mean RMSE Model 1 {_fmt(np.nanmean(r['model1']) if pairs else math.nan)}, Model 2 "
-        f"{_fmt(np.nanmean(r['model2']) if pairs else math.nan)}; {_oos_detail(pairs, missing)}")
+        f"{_fmt(np.nanmean(r['model2']) if pairs else math.nan)}; margin: {margins.FALL_FRACTION:.0%} of the DEM's "
+        f"fall of {label}, {_fmt(margin / margins.FALL_FRACTION)}; {_oos_detail(pairs, missing)}",
+        margin=margin, **_spread(boot, v))
 
 
 def turning_row(runs, boot) -> dict:
@@ -295,7 +314,7 @@ def turning_row(runs, boot) -> dict:
         "is unclear are left out", "fraction of runs", 0.0, ">", est, lo, hi,
         "paired " + stats.bootstrap_test_name(boot.n_resamples), n, SEED_UNIT,
         f"opposite to the DEM: Model 1 in {count['model1']} of {n_runs} runs, Model 2 in {count['model2']} of "
-        f"{n_runs}; {_oos_detail(pairs, missing)}")
+        f"{n_runs}; {_oos_detail(pairs, missing)}", margin=margins.TURN_FRACTION, **_spread(boot, v))
 
 
 def width_row(runs, boot) -> dict:
@@ -323,15 +342,31 @@ def width_row(runs, boot) -> dict:
         "|Model 2 - DEM|, sinusoidal runs out of sample, per seed", "strain", 0.0, "<", est, lo, hi,
         "paired " + stats.bootstrap_test_name(boot.n_resamples), n, SEED_UNIT,
         f"mean width DEM {_fmt(mean['dem'])}, Model 1 {_fmt(mean['model1'])}, Model 2 {_fmt(mean['model2'])}; "
-        f"Model 2 sharper than the DEM in {sharper} of {len(pairs)} runs; {_oos_detail(pairs, missing)}")
+        f"Model 2 sharper than the DEM in {sharper} of {len(pairs)} runs; margin: "
+        f"{margins.WIDTH_FRACTION:.0%} of the DEM's width; {_oos_detail(pairs, missing)}",
+        margin=margins.width_margin(w["dem"]), **_spread(boot, v))
 
 
-def freeform_rows(ff: pd.DataFrame) -> list:
+def _from_interval(value, low, high, n) -> dict:
+    r"""Equivalence interval and s.d. per seed of a row given only as a value and its 95 % interval.
+
+    Normal scaling: :math:`\hat\mu \pm (z_{0.95}/z_{0.975})\,h` with :math:`h` each half-width, and
+    :math:`s = (high - low)\sqrt n / (2 z_{0.975})`.
+    """
+    from scipy.stats import norm
+    k = norm.ppf(0.95) / norm.ppf(0.975)
+    sd = (high - low) * math.sqrt(n) / (2.0 * norm.ppf(0.975)) if n >= 2 else math.nan
+    return dict(eq=(value - k * (value - low), value + k * (high - value)), sd=float(sd))
+
+
+def freeform_rows(ff: pd.DataFrame, margin: float = math.nan) -> list:
     """Claims 9 and 10 from the free-form fit (``calibrate.freeform``'s ``freeform.csv`` of one calibration set).
 
     9: any X-dependent Eq. 4 (free-form alpha1(X), alpha2(X)) beats Model 2 on the fall of |A|: the upper
     bound of the paper's improvement. 10: the data ask for a pole: alpha1 bends down toward the largest X
     visited (Model 1's c1 <= 0). Both from leave-one-seed-out fits, paired per held-out run (``freeform.csv``).
+    ``margin``: claim 9's (claim 4's: ``margins.fall_margin`` of |A|); its equivalence interval is the 95 %
+    interval of ``freeform.csv`` scaled to 90 % (``_from_interval``).
     """
     if ff is None or "section" not in ff or not (ff["section"] == "difference").any():
         return []
@@ -349,14 +384,16 @@ def freeform_rows(ff: pd.DataFrame) -> list:
              "|A|", 0.0, "<", up["value"], up["low"], up["high"],
              "paired " + stats.bootstrap_test_name(), int(up["n"]), "seeds (leave-one-seed-out)",
              f"Model 1 - Model 2 on the same runs {_fmt(m1['value'])} [{_fmt(m1['low'])}, {_fmt(m1['high'])}]; "
-             f"penalty {pen} by cross-validation"),
+             f"penalty {pen} by cross-validation; margin: claim 4's; 90 % interval: the 95 % one scaled "
+             f"(normal)", margin=margin, **_from_interval(up["value"], up["low"], up["high"], int(up["n"]))),
         _row("10", "the data ask for a pole: alpha1 bends toward the largest X visited (Model 1's c1 <= 0)",
              "the paper, Sec. 3.2 (Eq. 6, Fig. 3)",
              "free-form alpha1(X_hi) - alpha1(0) - alpha1'(0) X_hi, X_hi the largest X visited",
              "alpha1", 0.0, "<", b1["value"], b1["low"], b1["high"],
              "jackknife over seeds (leave-one-seed-out fits), +-1.96 s.e.", int(b1["n"]), "seeds",
              f"alpha2's bend (a pole with c2 >= 0 bends it up): {_fmt(b2['value'])} [{_fmt(b2['low'])}, "
-             f"{_fmt(b2['high'])}]; {b1['detail']}"),
+             f"{_fmt(b2['high'])}]; {b1['detail']}", sd=_from_interval(b1["value"], b1["low"], b1["high"],
+                                                                      int(b1["n"]))["sd"]),
     ]
 
 
@@ -371,6 +408,10 @@ class Bootstrap:
 
     def __call__(self, values):
         return stats.mean_interval(values, self.n_resamples, self.seed)
+
+    def equivalence(self, values):
+        """The 90 % equivalence interval of the same resamples (``stats.equivalence_interval``)."""
+        return stats.equivalence_interval(values, self.n_resamples, self.seed)
 
 
 def eq2_params(params_path):
@@ -412,5 +453,5 @@ def claims_table(pred: pd.DataFrame, dem_cases: list, eq2=None, n_resamples=stat
     rows.append(early_error_row(runs, "7", "Model 1's friction is better at the start of the reversal",
                                 "the paper, Sec. 4 (zoom of Fig. 4c)", "mu", "mu", EARLY_MU, boot))
     rows.append(steady_angle_row(steady, boot))
-    rows += freeform_rows(freeform)
+    rows += freeform_rows(freeform, margins.fall_margin(_oos(runs)[0], "A_norm"))
     return pd.DataFrame(rows, columns=COLUMNS)
