@@ -8,41 +8,21 @@ they are (``smooth=1``). The noise level a DEM measure is judged against is
 ``tail_noise``: the scatter of the *smoothed* series about a straight line over
 the last ``TAIL`` of the run, where the run is close to its new steady state.
 It includes the serial correlation of the DEM samples, which a
-sample-to-sample difference would miss.
+sample-to-sample difference would miss. The smoothing, the noise and the
+passage of theta_A live in ``dem_contract.passage`` (the comparison reports
+the same passage from the same function).
 """
 from __future__ import annotations
 
 import math
 
 import numpy as np
-from scipy.ndimage import uniform_filter1d
 from scipy.stats import binned_statistic
 
 from dem_contract import fabric_angle_deg, fabric_norm
+from dem_contract.passage import SMOOTH, TAIL, Z_CLEAR, passage, smooth, tail_noise  # noqa: F401  (one home)
 
-SMOOTH = 5          # samples of the running mean on DEM curves (compare's claims use the same)
-TAIL = 0.4          # last fraction of the run's strain judged for the noise
-Z_CLEAR = 2.0       # |A_xx| / noise above which a crossing is clear
 N_BINS = 20         # bins of the single-valued curves of the collapse
-
-
-def smooth(x, width: int = SMOOTH):
-    """Centred running mean over ``width`` samples (edges: the nearest value repeated)."""
-    x = np.asarray(x, float)
-    return x.copy() if width <= 1 else uniform_filter1d(x, size=width, mode="nearest")
-
-
-def tail_noise(s, x) -> float:
-    r"""Standard deviation of ``x`` about its least-squares line over the last ``TAIL`` of ``s``.
-
-    .. math:: \sigma = \operatorname{sd}\big(x_i - (\beta_0 + \beta_1 s_i)\big), \quad s_i \ge s_{end} - T (s_{end} - s_0)
-    """
-    s, x = np.asarray(s, float), np.asarray(x, float)
-    m = s >= s[-1] - TAIL * (s[-1] - s[0])
-    if m.sum() < 5:
-        return math.nan
-    coef = np.polyfit(s[m], x[m], 1)
-    return float(np.std(x[m] - np.polyval(coef, s[m]), ddof=2))
 
 
 def fall(s, x, steady: float, noisy: bool) -> dict:
@@ -61,37 +41,11 @@ def fall(s, x, steady: float, noisy: bool) -> dict:
 
 
 def crossing(s, A_xx, A_xy, noisy: bool) -> dict:
-    r"""Which axis theta_A turns through: the sign of A_xx where A_xy changes sign.
+    """Which axis theta_A turns through, for curves already smoothed: ``dem_contract.passage.passage`` (width 1).
 
-    theta_A = atan2(A_xy, A_xx)/2 leaves one half of the circle (A_xy < 0:
-    90-180 degrees) for the other only through A_xy = 0, where theta_A is 90
-    degrees if A_xx < 0 (the vertical) and 0/180 if A_xx > 0 (the horizontal).
-    At the first sign change of A_xy, A_xx is interpolated and compared with
-    its noise (``tail_noise``): :math:`z = A_{xx} / \sigma`.
-
-    Returns
-    -------
-    dict
-        ``axis``: "90" (z < -Z_CLEAR), "0/180" (z > Z_CLEAR), "unclear", or
-        "none" (A_xy never changes sign); ``s_cross``, ``A_xx_cross``, ``z``
-        (for a noiseless curve z is +-inf by the sign of A_xx).
+    The claims stage calls ``passage`` on the raw DEM (it smooths with ``SMOOTH``), as ``compare`` does.
     """
-    s, a, b = (np.asarray(v, float) for v in (s, A_xx, A_xy))
-    sign0 = np.sign(b[0]) if b[0] != 0 else np.sign(b[np.nonzero(b)[0][0]]) if np.any(b) else 0.0
-    idx = np.nonzero(np.sign(b) == -sign0)[0] if sign0 else np.array([], int)
-    if not idx.size:
-        return {"axis": "none", "s_cross": math.nan, "A_xx_cross": math.nan, "z": math.nan}
-    k = int(idx[0])
-    w = b[k - 1] / (b[k - 1] - b[k])     # linear interpolation to A_xy = 0
-    a_c = a[k - 1] + w * (a[k] - a[k - 1])
-    s_c = s[k - 1] + w * (s[k] - s[k - 1])
-    if noisy:
-        sigma = tail_noise(s, a)
-        z = a_c / sigma if sigma > 0 else math.copysign(math.inf, a_c)
-    else:
-        z = math.copysign(math.inf, a_c) if a_c != 0 else 0.0
-    axis = "90" if z < -Z_CLEAR else "0/180" if z > Z_CLEAR else "unclear"
-    return {"axis": axis, "s_cross": float(s_c), "A_xx_cross": float(a_c), "z": float(z)}
+    return passage(s, A_xx, A_xy, noisy=noisy, width=1)
 
 
 def transition_width(s, A_xx, A_xy, low: float = 0.1, high: float = 0.9, end_fraction: float = 0.1) -> float:

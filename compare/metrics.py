@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from dem_contract import angle_difference, fabric_angle_deg, fabric_norm
+from dem_contract.passage import passage
 
 QUANTITIES = ("A_norm", "theta_A", "mu")
 
@@ -100,7 +101,8 @@ def recovery_strain(x, s, steady: float, fraction: float = 0.9) -> float:
     return float(s[k + hit[0]]) if hit.size else float("nan")
 
 
-def claims(s, A_xx, A_xy, mu, steady_A: float, steady_mu: float, smooth: int = 1, fraction: float = 0.9) -> dict:
+def claims(s, A_xx, A_xy, mu, steady_A: float, steady_mu: float, smooth: int = 1, fraction: float = 0.9,
+           noisy: bool | None = None) -> dict:
     r"""The paper's claims about one reversal curve, as numbers.
 
     Parameters
@@ -116,11 +118,17 @@ def claims(s, A_xx, A_xy, mu, steady_A: float, steady_mu: float, smooth: int = 1
         anything is measured: 1 for the models, a few samples for noisy DEM.
     fraction : float
         Recovery level (0.9: 90 % of the steady values).
+    noisy : bool, optional
+        Whether the curve is the DEM's (its passage judged against its noise);
+        default: ``smooth > 1``.
 
     Returns
     -------
     dict
-        ``theta_passage`` (see ``theta_passage``), ``theta_start``,
+        ``theta_passage``: which axis theta_A turns through, "90", "0/180",
+        "unclear" or "none" (``dem_contract.passage.passage``: the sign of A_xx
+        where A_xy changes sign, against the noise; the claims stage uses the
+        same function), ``theta_start``,
         ``theta_end``, ``min_A``, ``s_min_A``, ``min_mu``, ``s_min_mu``,
         ``s_recover_A``, ``s_recover_mu`` (NaN if not reached within the run).
     """
@@ -130,7 +138,8 @@ def claims(s, A_xx, A_xy, mu, steady_A: float, steady_mu: float, smooth: int = 1
     min_A, s_min_A = minimum(A, s)
     min_mu, s_min_mu = minimum(m, s)
     return dict(
-        theta_passage=theta_passage(th), theta_start=float(th[0]), theta_end=float(th[-1]),
+        theta_passage=passage(s, A_xx, A_xy, noisy=smooth > 1 if noisy is None else noisy, width=smooth)["axis"],
+        theta_start=float(th[0]), theta_end=float(th[-1]),
         min_A=min_A, s_min_A=s_min_A, min_mu=min_mu, s_min_mu=s_min_mu,
         s_recover_A=recovery_strain(A, s, steady_A, fraction),
         s_recover_mu=recovery_strain(m, s, steady_mu, fraction),

@@ -25,6 +25,7 @@ import numpy as np
 import pandas as pd
 
 from dem_contract import angle_difference, split_case_label
+from dem_contract.passage import passage
 from model import load_params, params_from_dict
 
 from . import metrics
@@ -101,7 +102,7 @@ def _nominal_row(base, nominal, dem):
     if nominal.table is None:
         return dict(base, parameter="(fitted)", kind="nominal", status=nominal.status)
     return dict(base, parameter="(fitted)", kind="nominal", status="ok",
-                theta_passage=metrics.theta_passage(nominal.table["theta_A"]),
+                theta_passage=_passage(nominal.table),
                 **{f"rmse_{q}": metrics.errors(dem, nominal.table)[f"rmse_{q}"] for q in QUANTITIES})
 
 
@@ -154,8 +155,13 @@ def _change_row(row, table, nominal_table, dem):
                 diff = angle_difference(table[q], nominal_table[q])
             row[f"dmax_{q}"] = float(np.max(np.abs(diff)))
     row.update({f"rmse_{q}": v for q, v in ((q, metrics.errors(dem, table)[f"rmse_{q}"]) for q in QUANTITIES)})
-    row["theta_passage"] = metrics.theta_passage(table["theta_A"])
+    row["theta_passage"] = _passage(table)
     return row
+
+
+def _passage(table) -> str:
+    """Which axis a model curve's theta_A turns through (``dem_contract.passage``, the rule of every stage)."""
+    return passage(table["s_rev"].to_numpy(), table["A_xx"].to_numpy(), table["A_xy"].to_numpy(), noisy=False)["axis"]
 
 
 def _envelopes(curves, nominal):
