@@ -6,6 +6,9 @@ r"""Command line of the claims stage.
         [--calibration results/calibration/all/params.yaml] [--sets all heaviside_only ...] \
         [--resamples 2000] [--seed 0] [--preset paper=config/config.yaml ...] --out results/claims
         # -> paper_claims.csv, paper_claims.png, power.csv, README_section.md
+    python -m claims plan --table results/claims/paper_claims.csv --dem results/dem/<case> ... \
+        [--protocols heaviside sinusoidal ...] --out results/claims/plan.csv
+        # -> seeds and core-hours that decide every undecided claim (claims.plan)
 
 Bad input (a missing table or column, a bad DEM file) exits with status 2 and
 a message naming the file.
@@ -19,7 +22,7 @@ from pathlib import Path
 
 from dem_contract import REVERSAL_PROTOCOLS, DEMInputError
 
-from . import inputs, power, report, table
+from . import inputs, plan, power, report, table
 
 
 def build_parser():
@@ -50,6 +53,9 @@ def _preset(text):
 
 
 def main(argv=None) -> int:
+    argv = sys.argv[1:] if argv is None else list(argv)
+    if argv[:1] == ["plan"]:
+        return plan.main(argv[1:])
     args = build_parser().parse_args(argv)
     t0 = time.perf_counter()
     try:

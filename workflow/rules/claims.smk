@@ -74,6 +74,31 @@ rule claims:
         " --out {CLAIMS} > {log} 2>&1"
 
 
+# The planner (python -m claims plan): for every claim the table leaves undecided, the seeds and
+# core-hours (the campaign's measured stage costs; 'unknown' when not measured) that decide it
+# at 80 % power: reproduced, contradicted or negligible. Extending `seeds:` reruns no finished seed.
+rule claims_plan:
+    input:
+        table=f"{CLAIMS}/paper_claims.csv",
+        sidecars=dem_sidecars,
+    output:
+        report(f"{CLAIMS}/plan.csv", caption="../report/claims_plan.rst", category=CLAIMS_CATEGORY),
+    params:
+        dirs=[case_dir(label) for label in CASES],
+        protocols=PROTOCOLS,
+    resources:
+        runtime=COST_CLAIMS.runtime,     # an upper bound: the plan reads one table and the sidecars
+        mem_mb=COST_CLAIMS.mem_mb,
+    log:
+        f"{RESULTS}/logs/claims/claims_plan.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/claims/claims_plan.tsv"
+    threads: 1
+    shell:
+        "{PY} -m claims plan --table {input.table} --dem {params.dirs} --protocols {params.protocols}"
+        " --out {output} > {log} 2>&1"
+
+
 def claims_targets():
-    """The claims table, its figure, its README section and the power table."""
-    return list(rules.claims.output)
+    """The claims table, its figure, its README section, the power table and the plan."""
+    return list(rules.claims.output) + list(rules.claims_plan.output)
