@@ -42,6 +42,8 @@ def forest_plot(table, path) -> None:
             hi = r["high"] if np.isfinite(r["high"]) else r["estimate"]
             ax.errorbar([r["estimate"]], [0], xerr=[[r["estimate"] - lo], [hi - r["estimate"]]], fmt="o",
                         color=colour, capsize=4, lw=1.6)
+            if has_margin and np.isfinite(r["eq_low"]) and np.isfinite(r["eq_high"]):   # the 90 % interval
+                ax.plot([r["eq_low"], r["eq_high"]], [0, 0], color=colour, lw=5, alpha=0.45, solid_capstyle="butt")
             span = [v for v in (lo, hi, r["null"], r["estimate"]) if np.isfinite(v)]
             if has_margin:
                 span += [r["null"] - margin, r["null"] + margin]
@@ -55,7 +57,7 @@ def forest_plot(table, path) -> None:
         ax.set_ylabel(f"claim {r['claim_id']}", rotation=0, ha="right", va="center")
         ax.set_title(f"{_short(r['claim'])}: {r['verdict']} (n = {r['n']})", fontsize=8, loc="left",
                      color=colour)
-        band = f"; shaded: null +- margin {margin:.2g}" if has_margin else ""
+        band = f"; shaded: null +- margin {margin:.2g}; thick: 90 % interval" if has_margin else ""
         ax.set_xlabel(f"{r['unit']} ({side}; dashed: null{band})", fontsize=7, labelpad=1)
         ax.tick_params(labelsize=7)
     fig.suptitle("The paper's claims: estimate and 95 % interval per claim, and the margin that matters",
