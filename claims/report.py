@@ -102,6 +102,13 @@ def _n(x):
     return "no finite number" if not np.isfinite(x) else f"{x:,.0f}"
 
 
+def _core_hours(x):
+    """Core-hours as text; a cost the stage sidecars do not give is 'unknown', not NaN."""
+    if x == np.inf:
+        return "no finite number of core-hours"
+    return "unknown core-hours" if not np.isfinite(x) else f"{x:.2g} core-hours"
+
+
 def power_section(power, presets: list, campaign: dict, noise: dict) -> str:
     """The README's power paragraph: seeds needed per claim and effect (``claims.power``), and each preset's reach.
 
@@ -127,7 +134,7 @@ def power_section(power, presets: list, campaign: dict, noise: dict) -> str:
         lines.append(f"- claim {r['claim_id']} ({r['quantity']}), {r['effect_choice']} effect {r['effect']:.2g} "
                      f"(s.d. per seed {r['sd_per_seed']:.2g} at {r['disks_per_seed']:.0f} disks, "
                      f"{r['transients_per_seed']:g} transients per seed): {_n(r['seeds_needed'])} seeds, "
-                     f"{_n(r['particles'])} disk-seeds, {r['core_hours']:.2g} core-hours at this campaign's "
+                     f"{_n(r['particles'])} disk-seeds, {_core_hours(r['core_hours'])} at this campaign's "
                      f"settings (power now {r['power_measured']:.2f}).")
     lines.append("")
     for p in [campaign, *presets]:

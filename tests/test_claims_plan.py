@@ -110,3 +110,13 @@ def test_extending_seeds_plans_only_the_new_seeds_dem(finished):
     counts = planned(finished, lambda c: c.update(seeds=[*c["seeds"], 3]), "one_more_seed", all_targets=True)
     assert {rule: counts.get(rule) for rule in DEM_RULES} == {rule: 1 for rule in DEM_RULES}, counts
     assert counts.get("claims_plan") == 1 and counts.get("claims") == 1
+
+
+def test_power_paragraph_names_an_unmeasured_cost_unknown():
+    from claims import report
+    row = dict(claim_id="4", quantity="|A|", effect_choice="measured", effect=-0.002, sd_per_seed=0.003,
+               disks_per_seed=500.0, transients_per_seed=2.0, seeds_needed=20.0, particles=1e4,
+               core_hours=float("nan"), power_measured=0.3, seeds_measured=4, window=0.1, transients=40.0)
+    text = report.power_section(pd.DataFrame([row]), [], dict(name="m", seeds=4, disks=500.0, transients=2.0),
+                                dict(measured=0.01, ratio=1.0))
+    assert "unknown core-hours" in text and "nan" not in text
