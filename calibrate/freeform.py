@@ -3,8 +3,10 @@ r"""Free-form alpha1(X), alpha2(X): the upper bound of any X-dependent Eq. 4 (is
 Method
 ------
 Eq. 4 with alpha1, alpha2 any smooth functions of X (``model.laws.AlphaSpline``:
-cubic B-splines on ``n_breaks`` evenly spaced breaks over the X the samples
-visit, from their 0.5th to their 99.5th percentile, continued linearly outside) is fitted by trajectory fitting on the
+cubic B-splines on breaks over the X the samples visit, from their 0.5th to
+their 99.5th percentile, continued linearly outside; how many breaks and how
+they crowd toward the largest X visited, where a pole would act, is chosen by
+cross-validation, ``breaks_for``) is fitted by trajectory fitting on the
 residuals of route 2 (``route2.curves``, ``route2._residual_vector`` and the
 steady residuals of ``fits``), plus a roughness penalty
 
@@ -18,10 +20,15 @@ holds Model 2's (the quadratic law of [15]), so the free-form fit and Model 2
 differ only in their alphas. The start is Model 2's route-2 fit, represented
 exactly (``laws.spline_of_linear``).
 
-Penalty by cross-validation: leave one seed (DEM case) out; for every
-:math:`\lambda` of ``penalties`` the fit on the other seeds predicts the held-out
-seed's runs; the :math:`\lambda` with the lowest held-out mean squared
-normalised residual (route 2's objective) wins and is refitted on every seed.
+Breaks and penalty by cross-validation: leave one seed (DEM case) out; for
+every knot layout of ``knot_layouts`` (number of breaks, crowding toward the
+largest X) and every :math:`\lambda` of ``penalties`` the fit on the other
+seeds predicts the held-out seed's runs; the pair with the lowest held-out
+mean squared normalised residual (route 2's objective) wins and is refitted
+on every seed. Evenly spaced breaks with too few of them limit the bound
+exactly where a pole acts (one cubic piece over the last fifth of the X
+range); the layouts crowded toward the largest X let the data ask for a bend
+there.
 Model 1 and Model 2 are refitted by route 2 on the same folds (from their
 full-data fits, ``cv_evals`` evaluations), so every held-out run is predicted
 by the three laws calibrated without its seed: paired errors per run, averaged
@@ -69,6 +76,8 @@ Z95 = 1.959963984540054
 class FreeformSettings:
     n_breaks: int = 5                                   # breaks over the X range visited (K = n_breaks + 2 per alpha)
     penalties: tuple = (1e-6, 1e-4, 1e-2, 1.0)           # lambda grid of the cross-validation
+    layouts: tuple | None = None                        # (breaks, crowding) pairs the CV chooses among; None:
+    #                                                     even n_breaks, n_breaks crowded and n_breaks + 2 crowded
     max_evals: int = 180                                # model evaluations of the final fit (Jacobian points count)
     cv_evals: int = 60                                  # ... of each cross-validation fit
     early_strain: float = 0.1
@@ -80,6 +89,16 @@ class FreeformSettings:
             raise ValueError(f"free-form fit: n_breaks = {self.n_breaks!r} must be an integer >= 2")
         if not (len(self.penalties) and all(p > 0 for p in self.penalties)):
             raise ValueError(f"free-form fit: penalties = {self.penalties!r} must be positive numbers")
+        for n, crowd in self.knot_layouts():
+            if not (int(n) == n and n >= 2 and crowd >= 1.0):
+                raise ValueError(f"free-form fit: knot layout ({n!r}, {crowd!r}) needs an integer number of breaks "
+                                 f">= 2 and a crowding >= 1 (1: evenly spaced)")
+
+    def knot_layouts(self) -> tuple:
+        """The (number of breaks, crowding) pairs the cross-validation chooses among (``breaks_for``)."""
+        if self.layouts is not None:
+            return tuple((int(n), float(c)) for n, c in self.layouts)
+        return ((self.n_breaks, 1.0), (self.n_breaks, CROWDING), (self.n_breaks + 2, CROWDING))
 
     def as_dict(self) -> dict:
         return {k: (list(v) if isinstance(v, tuple) else v) for k, v in asdict(self).items()}
@@ -94,10 +113,26 @@ def sample_X(replays) -> np.ndarray:
 X_RANGE = (0.5, 99.5)
 
 
-def breaks_for(replays, n_breaks: int) -> tuple:
-    """``n_breaks`` evenly spaced breaks over the X the samples visit (percentiles ``X_RANGE``)."""
+#: Crowding of the breaks toward the largest X in the default layouts (2: spacing falls linearly to 0 there).
+CROWDING = 2.0
+
+
+def breaks_for(replays, n_breaks: int, crowding: float = 1.0) -> tuple:
+    r"""``n_breaks`` breaks over the X the samples visit (percentiles ``X_RANGE``), crowded toward the largest.
+
+    .. math:: x_k = x_{lo} + (x_{hi} - x_{lo})\,\big(1 - (1 - u_k)^{p}\big), \qquad u_k = k/(n - 1)
+
+    with :math:`p` = ``crowding``: 1 evenly spaced; above 1 the spacing shrinks toward :math:`x_{hi}`,
+    where Model 1's pole acts.
+    """
     lo, hi = np.percentile(sample_X(replays), X_RANGE)
-    return tuple(np.linspace(float(lo), float(hi), n_breaks))
+    return breaks_over(float(lo), float(hi), n_breaks, crowding)
+
+
+def breaks_over(lo: float, hi: float, n_breaks: int, crowding: float = 1.0) -> tuple:
+    """The breaks of ``breaks_for`` between ``lo`` and ``hi`` (its equation)."""
+    u = np.linspace(0.0, 1.0, n_breaks)
+    return tuple(float(x) for x in lo + (hi - lo) * (1.0 - (1.0 - u) ** crowding))
 
 
 def roughness_matrix(breaks) -> np.ndarray:
@@ -210,26 +245,31 @@ def _heldout(items, held, s2, sigma_mu, early_strain) -> list:
     return out
 
 
-def _fold_job(k, case, replays, doc2, start, steady, sigma_mu, settings, s2):
-    """One fold: spline fits at every penalty and route-2 refits of both models without ``case``; held-out scores."""
+def _fold_job(k, case, replays, doc2, candidates, steady, sigma_mu, settings, s2, models=True):
+    """One fold: spline fits at every candidate (start on its breaks, penalty; the candidates share their breaks:
+    one batch) and, with ``models``, route-2 refits of both models without ``case``; held-out scores."""
     train = [r for r in replays if r.case != case]
     held = [r for r in replays if r.case == case]
 
     def job():
         sps = [fit_spline(train, doc2, start, steady, sigma_mu, lam, settings, s2, settings.cv_evals)[0]
-               for lam in settings.penalties]
-        s2m = replace(s2, max_evals=settings.cv_evals)
-        refit = {m: route2.fit(train, doc2, m, doc2[m], steady, sigma_mu, s2m).values for m in ("model1", "model2")}
+               for start, lam in candidates]
         prm = params_from_dict(doc2)
         items = [(prm, "model2", settings.friction, sp) for sp in sps]
-        for m in ("model1", "model2"):
-            d = dict(doc2)
-            d[m] = refit[m]
-            items.append((params_from_dict(d), m, "eq2" if m == "model1" else "quadratic"))
+        if models:
+            s2m = replace(s2, max_evals=settings.cv_evals)
+            refit = {m: route2.fit(train, doc2, m, doc2[m], steady, sigma_mu, s2m).values
+                     for m in ("model1", "model2")}
+            for m in ("model1", "model2"):
+                d = dict(doc2)
+                d[m] = refit[m]
+                items.append((params_from_dict(d), m, "eq2" if m == "model1" else "quadratic"))
         scores = _heldout(items, held, s2, sigma_mu, settings.early_strain)
+        errors = {"spline": [s[1] for s in scores[:len(sps)]]}
+        if models:
+            errors.update(model1=scores[-2][1], model2=scores[-1][1])
         return {"case": case, "splines": sps, "held": [r.label for r in held],
-                "cv": [s[0] for s in scores[:len(sps)]], "errors": {"spline": [s[1] for s in scores[:len(sps)]],
-                                                                    "model1": scores[-2][1], "model2": scores[-1][1]}}
+                "cv": [s[0] for s in scores[:len(sps)]], "errors": errors}
     return job
 
 
@@ -250,29 +290,42 @@ def run(replays, doc2: dict, steady: dict, sigma_mu: float, s2: route2.Route2Set
     Returns
     -------
     dict
-        ``spline`` (AlphaSpline, final fit), ``penalty``, ``cv`` (DataFrame: penalty, cv_score),
-        ``folds`` (jackknife AlphaSplines at the chosen penalty), ``errors`` (DataFrame: one row
+        ``spline`` (AlphaSpline, final fit), ``penalty`` and ``layout`` (number of breaks, crowding)
+        chosen, ``cv_all`` (DataFrame: n_breaks, crowding, penalty, cv_score, failed_folds, chosen),
+        ``cv`` (its rows of the chosen layout: penalty, cv_score, failed_folds),
+        ``folds`` (jackknife AlphaSplines at the chosen grid point), ``errors`` (DataFrame: one row
         per held-out run and law), ``table`` (the ``freeform.csv`` DataFrame), ``fit`` (info).
     """
     if s2.integrator != "batched":
         raise ValueError("free-form fit: needs the batched integrator (--integrator batched)")
-    br = breaks_for(replays, settings.n_breaks)
     m2 = doc2["model2"]
-    start = spline_of_linear(br, m2["c1"], 0.0, m2["c2"], m2["c3"])
+    layouts = settings.knot_layouts()
+    grid = [(n, crowd, lam) for n, crowd in layouts for lam in settings.penalties]
     cases = sorted({r.case for r in replays})
     if len(cases) < 2:
         raise ValueError(f"free-form fit: cross-validation leaves one seed out and needs 2 or more, got {cases}")
-    jobs = [_fold_job(k, c, replays, doc2, start, steady, sigma_mu, settings, s2) for k, c in enumerate(cases)]
-    finals = [(lambda lam=lam: fit_spline(replays, doc2, start, steady, sigma_mu, lam, settings, s2,
-                                          settings.max_evals)) for lam in settings.penalties]
-    done = route2.Lockstep().run(jobs + finals)
-    folds, fulls = done[:len(jobs)], done[len(jobs):]
+    by_layout = []      # per layout, its folds (one Lockstep each: a batch shares its breaks); models on the first
+    for i, (n, crowd) in enumerate(layouts):
+        start = spline_of_linear(breaks_for(replays, n, crowd), m2["c1"], 0.0, m2["c2"], m2["c3"])
+        cands = [(start, lam) for lam in settings.penalties]
+        by_layout.append(route2.Lockstep().run([_fold_job(k, c, replays, doc2, cands, steady, sigma_mu, settings, s2,
+                                                          models=i == 0) for k, c in enumerate(cases)]))
+    folds = []          # per fold, every grid point in grid order (layouts outer, penalties inner)
+    for f, base in enumerate(by_layout[0]):
+        folds.append(dict(base, cv=[c for lay in by_layout for c in lay[f]["cv"]],
+                          splines=[sp for lay in by_layout for sp in lay[f]["splines"]],
+                          errors=dict(base["errors"],
+                                      spline=[e for lay in by_layout for e in lay[f]["errors"]["spline"]])))
     cv = np.array([sum(f["cv"][j] * len(f["held"]) for f in folds) / sum(len(f["held"]) for f in folds)
-                   for j in range(len(settings.penalties))])
+                   for j in range(len(grid))])
     j = int(np.nanargmin(np.where(np.isfinite(cv), cv, np.nan))) if np.isfinite(cv).any() else 0
-    spline, info = fulls[j]
-    log(f"free-form: penalty {settings.penalties[j]:g} chosen by leave-one-seed-out CV "
-        f"({', '.join(f'{p:g}: {c:.4g}' for p, c in zip(settings.penalties, cv))}); final fit {info['message']}")
+    lam = grid[j][2]
+    start = spline_of_linear(breaks_for(replays, *grid[j][:2]), m2["c1"], 0.0, m2["c2"], m2["c3"])
+    spline, info = route2.Lockstep().run([lambda: fit_spline(replays, doc2, start, steady, sigma_mu, lam, settings,
+                                                             s2, settings.max_evals)])[0]
+    log(f"free-form: {grid[j][0]} breaks (crowding {grid[j][1]:g}) and penalty {lam:g} chosen by leave-one-seed-out "
+        f"CV ({', '.join(f'{n}/{c:g}/{p:g}: {v:.4g}' for (n, c, p), v in zip(grid, cv))}); final fit "
+        f"{info['message']}")
     rows = []
     for f in folds:
         for law, errs in (("freeform", f["errors"]["spline"][j]), ("model1", f["errors"]["model1"]),
@@ -281,10 +334,14 @@ def run(replays, doc2: dict, steady: dict, sigma_mu: float, s2: route2.Route2Set
                 rows.append({"case": f["case"], "run": label, "law": law, **e})
     errors = pd.DataFrame(rows)
     fold_splines = [f["splines"][j] for f in folds]
-    out = {"spline": spline, "penalty": settings.penalties[j], "fit": info, "folds": fold_splines, "errors": errors,
-           "cv": pd.DataFrame({"penalty": settings.penalties, "cv_score": cv,
-                               "failed_folds": [sum(not np.isfinite(f["cv"][k]) for f in folds)
-                                                for k in range(len(settings.penalties))]})}
+    cv_all = pd.DataFrame({"n_breaks": [g[0] for g in grid], "crowding": [g[1] for g in grid],
+                           "penalty": [g[2] for g in grid], "cv_score": cv,
+                           "failed_folds": [sum(not np.isfinite(f["cv"][k]) for f in folds) for k in range(len(grid))],
+                           "chosen": [k == j for k in range(len(grid))]})
+    same_layout = (cv_all["n_breaks"] == grid[j][0]) & (cv_all["crowding"] == grid[j][1])
+    out = {"spline": spline, "penalty": lam, "layout": grid[j][:2], "fit": info, "folds": fold_splines,
+           "errors": errors, "cv_all": cv_all,
+           "cv": cv_all.loc[same_layout, ["penalty", "cv_score", "failed_folds"]].reset_index(drop=True)}
     out["table"] = table(out, settings)
     return out
 
@@ -334,11 +391,13 @@ def table(res: dict, settings: FreeformSettings) -> pd.DataFrame:
     for name, c in (("alpha1", sp.c1), ("alpha2", sp.c2)):
         for k, v in enumerate(c):
             add("coefficients", f"{name}_c{k}", float(v), detail="cubic B-spline, clamped knots on the breaks")
-    for p, c, nf in zip(res["cv"]["penalty"], res["cv"]["cv_score"], res["cv"]["failed_folds"]):
-        add("cv", f"penalty_{p:g}", float(c), n=len(res["folds"]),
-            detail="; ".join(x for x in ("chosen" if p == res["penalty"] else "",
-                                         f"{nf} fold(s) whose fit cannot be integrated on the held-out seed "
-                                         f"(score inf)" if nf else "") if x))
+    for r in res["cv_all"].itertuples():
+        add("cv", f"penalty_{r.penalty:g}_breaks_{r.n_breaks}_crowding_{r.crowding:g}", float(r.cv_score),
+            n=len(res["folds"]),
+            detail="; ".join(x for x in ("chosen" if r.chosen else "",
+                                         f"{r.n_breaks} breaks, crowding {r.crowding:g} toward the largest X",
+                                         f"{r.failed_folds} fold(s) whose fit cannot be integrated on the held-out "
+                                         f"seed (score inf)" if r.failed_folds else "") if x))
     err, nr = res["errors"], settings.n_resamples
     for score in SCORES:
         for law in LAWS:
@@ -366,7 +425,8 @@ def curves_for_figure(res: dict, X) -> dict:
     """``{"X", "alpha1", "alpha2", "se1", "se2", "label"}`` for ``figures.fig3``."""
     a, se = jackknife_band(res["spline"], res["folds"], X)
     return {"X": np.asarray(X), "alpha1": a[0], "alpha2": a[1], "se1": se[0], "se2": se[1],
-            "label": f"free-form (penalty {res['penalty']:g}, band: 1.96 jackknife s.e.)"}
+            "label": f"free-form ({len(res['spline'].breaks)} breaks, penalty {res['penalty']:g}, band: 1.96 "
+                     f"jackknife s.e.)"}
 
 
 __all__ = ["FreeformSettings", "run", "fit_spline", "breaks_for", "table", "curves_for_figure", "pole_bend",

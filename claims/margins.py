@@ -45,7 +45,7 @@ STEADY_ANGLE_DEG = 1.0    # claim 8: degrees
 
 
 def fall_size(pairs, column: str) -> float:
-    r"""Mean over the scored runs of the DEM fall :math:`\bar x(0) - \min_s \bar x(s)` (running mean ``measures.SMOOTH``).
+    r"""Mean over the scored runs of the DEM fall :math:`\bar x(0) - \min_s \bar x(s)` (running mean, ``SMOOTH``).
 
     Parameters
     ----------

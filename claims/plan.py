@@ -161,7 +161,7 @@ def plan_table(table: pd.DataFrame, seed_cpu_s: float, ensembles: int = 1) -> pd
 
 
 def seed_cost(case_dirs, protocols) -> float:
-    """Mean measured CPU seconds of one case: its packing and pre-shear and one run of each protocol (NaN if unknown)."""
+    """Mean measured CPU seconds of one case: packing, pre-shear and one run of each protocol (NaN if unknown)."""
     cost = power.dem_cost(case_dirs, protocols)
     return float(cost["setup_cpu_s"] + len(protocols) * cost["transient_cpu_s"])
 

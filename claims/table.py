@@ -391,7 +391,8 @@ def freeform_rows(ff: pd.DataFrame, margin: float = math.nan) -> list:
     m1 = by_key.loc["early_A_norm: model1 - model2"]
     b1, b2 = by_key.loc["alpha1 bend at X_hi"], by_key.loc["alpha2 bend at X_hi"]
     chosen = ff[(ff["section"] == "cv") & ff["detail"].astype(str).str.contains("chosen")]["key"]
-    pen = chosen.iloc[0].replace("penalty_", "") if len(chosen) else "?"
+    pen = (chosen.iloc[0].replace("penalty_", "").replace("_breaks_", ", breaks ").replace("_crowding_", ", crowding ")
+           if len(chosen) else "?")
     return [
         _row("9", "an X-dependent Eq. 4 can capture the fall of |A| better than Model 2 (upper bound of the "
              "paper's improvement)", "the paper, Sec. 3.2 (Eq. 4, 6)",
@@ -400,8 +401,9 @@ def freeform_rows(ff: pd.DataFrame, margin: float = math.nan) -> list:
              "|A|", 0.0, "<", up["value"], up["low"], up["high"],
              "paired " + stats.bootstrap_test_name(), int(up["n"]), "seeds (leave-one-seed-out)",
              f"Model 1 - Model 2 on the same runs {_fmt(m1['value'])} [{_fmt(m1['low'])}, {_fmt(m1['high'])}]; "
-             f"penalty {pen} by cross-validation; margin: claim 4's; 90 % interval: the 95 % one scaled "
-             f"(normal)", margin=margin, **_from_interval(up["value"], up["low"], up["high"], int(up["n"]))),
+             f"penalty {pen} (toward the largest X) by cross-validation; margin: claim 4's; 90 % interval: "
+             f"the 95 % one scaled (normal)", margin=margin,
+             **_from_interval(up["value"], up["low"], up["high"], int(up["n"]))),
         _row("10", "the data ask for a pole: alpha1 bends toward the largest X visited (Model 1's c1 <= 0)",
              "the paper, Sec. 3.2 (Eq. 6, Fig. 3)",
              "free-form alpha1(X_hi) - alpha1(0) - alpha1'(0) X_hi, X_hi the largest X visited",

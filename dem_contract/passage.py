@@ -40,7 +40,8 @@ def smooth(x, width: int = SMOOTH):
 def tail_noise(s, x) -> float:
     r"""Standard deviation of ``x`` about its least-squares line over the last ``TAIL`` of ``s``.
 
-    .. math:: \sigma = \operatorname{sd}\big(x_i - (\beta_0 + \beta_1 s_i)\big), \quad s_i \ge s_{end} - T (s_{end} - s_0)
+    .. math:: \sigma = \operatorname{sd}\big(x_i - (\beta_0 + \beta_1 s_i)\big),
+              \quad s_i \ge s_{end} - T (s_{end} - s_0)
 
     NaN with fewer than 5 samples there.
     """

@@ -22,7 +22,8 @@ from model.laws import AlphaSpline, spline_basis, spline_of_linear
 
 M2 = default_params().model2   # alpha1 = c1 = -0.3, alpha2 = c2 + c3 X = -2 + 25 X
 TRUTH_M1 = dict(a1=-0.85, b1=0.0, c1=-3000.0, a2=-5.0, b2=100.0, c2=2000.0, X_c=0.0827)
-FAST = freeform.FreeformSettings(n_breaks=4, penalties=(1e-4, 1.0), cv_evals=30, max_evals=90, n_resamples=500)
+FAST = freeform.FreeformSettings(n_breaks=4, penalties=(1e-4, 1.0), layouts=((4, 1.0), (4, 2.0)), cv_evals=30,
+                                 max_evals=90, n_resamples=500)
 
 
 def test_spline_law_holds_a_linear_law_exactly_inside_and_outside_its_breaks():
