@@ -31,10 +31,11 @@ include: "workflow/rules/dem.smk"
 include: "workflow/rules/calibrate.smk"
 include: "workflow/rules/compare.smk"
 include: "workflow/rules/claims.smk"
+include: "workflow/rules/pole_start.smk"
 include: "workflow/rules/accuracy.smk"
 
 
 rule all:
     input:
-        all_targets(),
+        all_targets() + pole_start_targets(),
     default_target: True
