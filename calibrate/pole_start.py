@@ -42,34 +42,31 @@ import pandas as pd
 import yaml
 from scipy.optimize import least_squares
 
-from model import load_params, params_from_dict
+from model import load_params
 from model.batched import simulate_batch
-from model.pole_start import DELTA_MIN, far_pole, forward_history, mirrored_x, with_pole
+from model.pole_start import (DELTA_MIN, FORMAT_TAG, KEYS, block_params, far_pole, forward_history, load,  # noqa: F401
+                              mirrored_x, with_pole)
 
 from . import fits, profiles, route2
 from .route2 import FAILURES, Route2Settings
 
-KEYS = ("a1", "b1", "c1", "a2", "b2", "c2", "delta")
 SCALE = np.array([1.0, 10.0, 1e3, 1.0, 10.0, 1e3, 0.01])
 DELTA_MAX = 0.4
 DELTA_STARTS = (0.003, 0.01, 0.03, 0.1)
 PROFILE_POINTS = 10
 #: Relative steps of the profile's grid next to the optimum (the rest is geometric out to DELTA_MIN and beyond).
 NEAR = (0.05, 0.15, 0.4)
-FORMAT_TAG = "model1-pole-at-start"
 
 
 def bounds():
-    """Lower and upper bounds in ``KEYS`` order: Eq. 6's (``fits.M1_BOUNDS``) and ``DELTA_MIN <= delta <= DELTA_MAX``."""
+    """Lower and upper bounds in ``KEYS`` order: Eq. 6's (``fits.M1_BOUNDS``), ``DELTA_MIN <= delta <= DELTA_MAX``."""
     lo, hi = zip(*fits.M1_BOUNDS)
     return np.array([*lo, DELTA_MIN]), np.array([*hi, DELTA_MAX])
 
 
 def _block_params(base_doc: dict, vals: dict):
-    """A ``ModelParams`` holding ``vals``' a_i, b_i, c_i (X_c set per run later; range-checked here)."""
-    d = dict(base_doc)
-    d["model1"] = {**{k: vals[k] for k in fits.M1_KEYS if k != "X_c"}, "X_c": 0.5}
-    return params_from_dict(d, source="pole-at-start trial")
+    """``model.pole_start.block_params``: a ``ModelParams`` with ``vals``' a_i, b_i, c_i (range-checked)."""
+    return block_params(base_doc, vals)
 
 
 def reversal_x(params_list, replays, settings: Route2Settings) -> np.ndarray:
@@ -168,7 +165,8 @@ def fit(replays, base_doc: dict, start: dict, steady: dict, sigma_mu: float,
     fixed = dict(fixed or {})
     lo, hi = bounds()
     free = np.array([k not in fixed for k in KEYS])
-    keys, scale, lo, hi = tuple(k for k in KEYS if k not in fixed), SCALE[free], lo[free] / SCALE[free], hi[free] / SCALE[free]
+    keys, scale = tuple(k for k in KEYS if k not in fixed), SCALE[free]
+    lo, hi = lo[free] / scale, hi[free] / scale
     n_res = sum(3 * len(r.s) for r in replays) + fits.N_STEADY
     res, workers, state = _objective(replays, base_doc, steady, sigma_mu, settings, n_res, keys, scale, fixed)
     x0 = np.clip(np.array([start[k] for k in keys]) / scale, lo + 1e-9 * np.abs(lo) + 1e-12,
@@ -318,21 +316,6 @@ def run(case_dirs, params_path, protocols, out_yaml, max_evals: int = Route2Sett
     out_yaml.write_text(yaml.safe_dump(out, sort_keys=False))
     prof.to_csv(out_yaml.with_name(out_yaml.stem + "_profile.csv"), index=False)
     return out
-
-
-def load(path) -> tuple:
-    """A ``pole_start.yaml``: (the ``ModelParams`` of its set with the variant's a_i, b_i, c_i; delta)."""
-    path = Path(path)
-    try:
-        d = yaml.safe_load(path.read_text())
-    except (OSError, yaml.YAMLError) as exc:
-        raise ValueError(f"{path}: cannot read the pole-at-start fit ({exc})") from None
-    if not isinstance(d, dict) or d.get("format") != FORMAT_TAG or set(d.get("model1", {})) != set(KEYS):
-        raise ValueError(f"{path}: not a pole-at-start fit (format: {FORMAT_TAG}, model1 keys {', '.join(KEYS)})")
-    doc = load_params(d["params"]).to_dict()
-    doc.pop("provenance", None)
-    doc.pop("intervals", None)
-    return _block_params(doc, d["model1"]), float(d["model1"]["delta"])
 
 
 def main(argv=None) -> int:

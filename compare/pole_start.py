@@ -34,7 +34,7 @@ import numpy as np
 import pandas as pd
 
 from model import simulate
-from model.pole_start import far_pole, forward_history, mirrored_x, with_pole
+from model.pole_start import far_pole, forward_history, load, mirrored_x, with_pole
 
 from .comparison import _seed_rows, _tags_last, model_steady, transient_groups
 from .dem import canonical
@@ -87,8 +87,6 @@ def run(case_dirs, fit_path, protocols, set_name="all", train_cases=None, train_
 
     Only the variant's rows: ``source`` / ``model`` = ``model1_start``, seed level.
     """
-    from calibrate.pole_start import load
-
     params, delta = load(fit_path)
     labels = [str(getattr(d, "name", d)).rstrip("/").split("/")[-1] for d in case_dirs]
     train_cases = set(labels if train_cases is None else train_cases)

@@ -24,14 +24,20 @@ that configuration literally, run by run:
 from __future__ import annotations
 
 import dataclasses
+from pathlib import Path
 
 import numpy as np
+import yaml
 
 from .histories import steady_shear
+from .params import load_params, params_from_dict
 
 SQRT2 = float(np.sqrt(2.0))
 #: Smallest offset of the pole above the start X: the pole term is c_i X^4 / delta at the start.
 DELTA_MIN = 1e-4
+#: The fitted block of the variant (``calibrate.pole_start``): Eq. 6's a_i, b_i, c_i and delta in place of X_c.
+KEYS = ("a1", "b1", "c1", "a2", "b2", "c2", "delta")
+FORMAT_TAG = "model1-pole-at-start"
 #: A far pole for the forward part before a sinusoidal reversal (X < 0 there: no pole term).
 FAR_POLE = 0.99
 
@@ -67,3 +73,32 @@ def far_pole(params):
 def forward_history(strain_before: float, sign_before: float):
     """The forward shear before a reversal, at unit rate (time = strain; Eq. 4 is rate independent)."""
     return steady_shear(float(strain_before), float(np.sign(sign_before)))
+
+
+def block_params(base_doc: dict, vals: dict):
+    """A ``ModelParams``: ``base_doc`` (a parameter document) with ``vals``' a_i, b_i, c_i (X_c set per run later)."""
+    d = dict(base_doc)
+    d["model1"] = {**{k: vals[k] for k in KEYS if k != "delta"}, "X_c": 0.5}
+    return params_from_dict(d, source="pole-at-start parameters")
+
+
+def load(path) -> tuple:
+    """A ``pole_start.yaml`` (``calibrate.pole_start``): (its set's ``ModelParams`` with the variant's a_i, b_i, c_i;
+    delta).
+
+    Raises
+    ------
+    ValueError
+        When the file cannot be read or is not such a fit (format tag ``FORMAT_TAG``, the keys ``KEYS``).
+    """
+    path = Path(path)
+    try:
+        d = yaml.safe_load(path.read_text())
+    except (OSError, yaml.YAMLError) as exc:
+        raise ValueError(f"{path}: cannot read the pole-at-start fit ({exc})") from None
+    if not isinstance(d, dict) or d.get("format") != FORMAT_TAG or set(d.get("model1") or {}) != set(KEYS):
+        raise ValueError(f"{path}: not a pole-at-start fit (format: {FORMAT_TAG}, model1 keys {', '.join(KEYS)})")
+    doc = load_params(d["params"]).to_dict()
+    doc.pop("provenance", None)
+    doc.pop("intervals", None)
+    return block_params(doc, d["model1"]), float(d["model1"]["delta"])
