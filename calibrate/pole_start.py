@@ -53,6 +53,9 @@ from .route2 import FAILURES, Route2Settings
 SCALE = np.array([1.0, 10.0, 1e3, 1.0, 10.0, 1e3, 0.01])
 DELTA_MAX = 0.4
 DELTA_STARTS = (0.003, 0.01, 0.03, 0.1)
+#: Pole strengths (c1, c2) to start from besides the set's own (those of ``fits.fit_model1``'s starts).
+C_STARTS = ((-1e3, 1e3), (-1e2, 1e2), (-1e4, 1e3))
+N_FITS = 3
 PROFILE_POINTS = 10
 #: Relative steps of the profile's grid next to the optimum (the rest is geometric out to DELTA_MIN and beyond).
 NEAR = (0.05, 0.15, 0.4)
@@ -189,17 +192,42 @@ def fit(replays, base_doc: dict, start: dict, steady: dict, sigma_mu: float,
                           {"evaluations": state["n"], "failed_evaluations": state["fails"], "residuals": resid})
 
 
-def starts(base_doc, model1: dict) -> list:
-    """The starting points: ``model1``'s a_i, b_i, c_i with each delta of ``DELTA_STARTS`` (the objective has
-    several minima in delta: a near pole with small c_i and a far one with large c_i fit alike)."""
-    return [{**{k: model1[k] for k in fits.M1_KEYS if k != "X_c"}, "delta": d} for d in DELTA_STARTS]
+def starts(base_doc: dict) -> list:
+    """Candidate starting points: every combination of a linear part, a pair (c1, c2) and a delta.
+
+    The linear parts are the set's Model 1 (a_i, b_i) and its Model 2 (Eq. 5 is Eq. 6 with
+    a1 = c1, b1 = 0, a2 = c2, b2 = c3); the pole strengths the set's own and ``C_STARTS``
+    (with c1 + c2 X_c < 0 the pole repels, so the runs can be integrated up to it); the
+    deltas ``DELTA_STARTS`` (the objective has several minima in delta: a near pole with
+    small c_i and a far one with large c_i fit alike).
+    """
+    m1, m2 = base_doc["model1"], base_doc["model2"]
+    linear = [(m1["a1"], m1["b1"], m1["a2"], m1["b2"]), (m2["c1"], 0.0, m2["c2"], m2["c3"])]
+    strengths = [(m1["c1"], m1["c2"]), *C_STARTS]
+    return [dict(a1=a1, b1=b1, c1=c1, a2=a2, b2=b2, c2=c2, delta=d)
+            for a1, b1, a2, b2 in linear for c1, c2 in strengths for d in DELTA_STARTS]
 
 
-def fit_multistart(replays, base_doc, model1: dict, steady, sigma_mu, settings: Route2Settings) -> fits.FitResult:
-    """``fit`` from every start of ``starts``; the lowest cost (the evaluations of all are summed in ``extra``)."""
-    results = [fit(replays, base_doc, s, steady, sigma_mu, settings) for s in starts(base_doc, model1)]
+def fit_multistart(replays, base_doc, steady, sigma_mu, settings: Route2Settings,
+                   n_fits: int = N_FITS) -> fits.FitResult:
+    """``fit`` from the ``n_fits`` best of ``starts`` (all scored in one batch first); the lowest cost.
+
+    The evaluations of all (screen and fits) are summed in ``extra``.
+    """
+    cands = starts(base_doc)
+    ok = [c for c in cands if np.all(np.isfinite(list(c.values())))]
+    clipped = []
+    lo, hi = bounds()
+    for c in ok:
+        v = np.clip([c[k] for k in KEYS], lo, hi)
+        clipped.append(dict(zip(KEYS, v.tolist())))
+    got = curves([(_block_params(base_doc, c), c["delta"]) for c in clipped], replays, settings)
+    costs = [float(np.sum(route2._residual_vector(g, replays, sigma_mu, settings) ** 2))
+             if not isinstance(g, Exception) else np.inf for g in got]
+    order = [i for i in np.argsort(costs) if np.isfinite(costs[i])][:n_fits] or [0]
+    results = [fit(replays, base_doc, clipped[i], steady, sigma_mu, settings) for i in order]
     best = min(results, key=lambda r: r.cost)
-    best.extra["evaluations"] = sum(r.extra["evaluations"] for r in results)
+    best.extra["evaluations"] = len(clipped) + sum(r.extra["evaluations"] for r in results)
     best.extra["starts"] = [(r.values["delta"], r.cost) for r in results]
     return best
 
@@ -211,25 +239,28 @@ def profile_delta(replays, base_doc, fitted: dict, steady, sigma_mu, settings: R
     Returns
     -------
     DataFrame
-        ``value`` (delta), ``objective``, ``delta`` (objective minus the minimum), ``threshold``,
-        ``evaluations``, ``message``.
+        ``value`` (delta), ``objective``, ``delta`` (objective minus the profile's minimum), ``threshold``,
+        ``integrable``, ``evaluations``, ``message``.
     dict
-        ``low``, ``high``, ``identified``, ``note``; ``low`` is 0 when the profile at ``DELTA_MIN`` is inside.
+        ``low``, ``high``, ``identified``, ``note`` (``profile_interval``).
+    dict, float
+        The values and cost at the profile's lowest point: the estimate, when a refit on the
+        grid went lower than the fit it started from (a fit that ran out of budget).
     """
     d_hat = fitted["delta"]
     near = [d_hat * (1.0 - f) for f in NEAR[: n_points // 4]] + [d_hat * (1.0 + f) for f in NEAR[: n_points // 4]]
     n_far = max(n_points - len(near), 2)
     down = np.geomspace(DELTA_MIN, max(d_hat * (1.0 - NEAR[-1]), DELTA_MIN), n_far - n_far // 2)[::-1]
-    up = np.geomspace(d_hat * (1.0 + NEAR[-1]) * 1.5, max(4.0 * d_hat, 0.05), n_far // 2)
+    up = np.geomspace(d_hat * (1.0 + NEAR[-1]) * 1.5, DELTA_MAX, n_far // 2)
     grid = np.unique(np.clip(np.concatenate([near, down, up]), DELTA_MIN, DELTA_MAX))
     thr = profiles.threshold(residuals, cost_min, len(KEYS)) if len(residuals) else math.nan
-    rows = [dict(value=d_hat, objective=cost_min, integrable=True, evaluations=0, message="optimum")]
+    rows = [dict(value=d_hat, objective=cost_min, integrable=True, evaluations=0, message="optimum", fit=fitted)]
     for side in (grid[grid < d_hat][::-1], grid[grid > d_hat]):   # away from the optimum, warm-started
         start = dict(fitted)
         for d in side:
             r = fit(replays, base_doc, start, steady, sigma_mu, settings, fixed={"delta": float(d)})
             rows.append(dict(value=float(d), objective=r.cost, integrable=bool(r.success),
-                             evaluations=r.extra["evaluations"], message=r.message))
+                             evaluations=r.extra["evaluations"], message=r.message, fit=r.values))
             if r.success:
                 start = r.values
     prof = pd.DataFrame(rows)
@@ -237,7 +268,9 @@ def profile_delta(replays, base_doc, fitted: dict, steady, sigma_mu, settings: R
     prof["threshold"] = thr
     prof = prof.sort_values("value").reset_index(drop=True)
     iv = profile_interval(prof)
-    return prof[["value", "objective", "delta", "threshold", "integrable", "evaluations", "message"]], iv
+    best = prof.loc[prof.loc[prof["integrable"], "objective"].idxmin()]
+    return (prof[["value", "objective", "delta", "threshold", "integrable", "evaluations", "message"]], iv,
+            dict(best["fit"]), float(best["objective"]))
 
 
 def profile_interval(prof: pd.DataFrame) -> dict:
@@ -299,10 +332,14 @@ def run(case_dirs, params_path, protocols, out_yaml, max_evals: int = Route2Sett
     doc = base.to_dict()
     doc.pop("provenance", None)
     doc.pop("intervals", None)
-    res = fit_multistart(replays, doc, doc["model1"], steady, sigma_mu, s2)
+    res = fit_multistart(replays, doc, steady, sigma_mu, s2)
     log(f"pole at start: delta = {res.values['delta']:.4g}, {res.extra['evaluations']} evaluations, {res.message}")
-    prof, iv = profile_delta(replays, doc, res.values, steady, sigma_mu, s2, res.cost, res.extra["residuals"],
-                             profile_points)
+    prof, iv, values, cost = profile_delta(replays, doc, res.values, steady, sigma_mu, s2, res.cost,
+                                           res.extra["residuals"], profile_points)
+    if cost < res.cost:   # a refit on the profile's grid went lower: it is the estimate
+        log(f"pole at start: the profile went lower at delta = {values['delta']:.4g} ({cost:.6g} < {res.cost:.6g})")
+        rms = float(np.sqrt(2 * cost / (res.n_data + fits.N_STEADY)))
+        res = dataclasses.replace(res, values=values, cost=cost, rms=rms)
     xr = reversal_x([_block_params(doc, res.values)], replays, s2)[0]
     out = {"format": FORMAT_TAG, "version": 1, "params": str(params_path),
            "model1": {k: res.values[k] for k in KEYS},
