@@ -100,3 +100,39 @@ def test_calibration_and_comparison_put_the_pole_at_the_same_place(truth_fit):
         for proto in ("heaviside", "sinusoidal"):
             rev = load_reversals(d, proto)[0]
             assert mps.reversal_x(rev, params) == pytest.approx(out["x_rev"][f"{rev.label}/{proto}"], abs=1e-6)
+
+
+def _curves(n_seeds=6, offsets=None, seed=0):
+    """Curves in the layout of ``predictions.csv`` (+ ``in_sample``): a DEM fall of |A| and model curves off it."""
+    from dem_contract import fabric_angle_deg
+
+    rng = np.random.default_rng(seed)
+    s = np.linspace(0.0, 0.3, 61)
+    rows = []
+    for k in range(1, n_seeds + 1):
+        norm = 0.2 - 0.15 * (s / 0.03) * np.exp(1.0 - s / 0.03) + rng.normal(0.0, 0.002, s.size)   # fall, recovery
+        for source, off in {"dem": 0.0, **offsets}.items():
+            a = -(norm + off * (1.0 + 0.2 * rng.standard_normal())) / np.sqrt(2.0)
+            b = np.zeros_like(s)
+            rows.append(pd.DataFrame(dict(set="heaviside_only", case=f"p1_I0.001_s{k}", group="p1_I0.001", seed=k,
+                                          protocol="sinusoidal", source=source, s_rev=s, A_xx=a, A_xy=b,
+                                          A_norm=np.abs(a) * np.sqrt(2.0), theta_A=fabric_angle_deg(a, b), mu=0.3,
+                                          in_sample=False, kind="sinusoidal")))
+    return pd.concat(rows, ignore_index=True)
+
+
+def test_claims_rows_say_reproduced_when_the_variant_follows_the_fall_better_than_both_models():
+    from claims.pole_start import variant_rows
+
+    t = variant_rows(_curves(offsets={"model1_start": 0.001, "model1": 0.02, "model2": 0.022}), n_resamples=500)
+    assert list(t["claim_id"]) == ["4-start-m1", "4-start-m2"]
+    assert (t["high"] < 0).all() and (t["verdict"].str.startswith("reproduced")).all()
+    assert "Model 1 (pole at start) minus Model 1" in t["statistic"].iloc[0]
+    assert "Model 1 (pole at start) minus Model 2" in t["statistic"].iloc[1]
+
+
+def test_claims_rows_never_say_reproduced_when_the_variant_is_worse():
+    from claims.pole_start import variant_rows
+
+    t = variant_rows(_curves(offsets={"model1_start": 0.022, "model1": 0.002, "model2": 0.002}), n_resamples=500)
+    assert not t["verdict"].str.contains("reproduced").any()
