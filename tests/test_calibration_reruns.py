@@ -45,6 +45,8 @@ CONFIG = {
     "accuracy": {"ode_work_precision": False},
 }
 
+pytestmark = pytest.mark.slow  # about a minute of calibration, then a dry run and a summary per edit
+
 
 def write(config, path):
     path.write_text(yaml.safe_dump(config))

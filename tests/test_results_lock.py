@@ -114,6 +114,7 @@ def start_and_freeze(cmd, lock_path, workdir):
     return proc
 
 
+@pytest.mark.slow
 def test_second_snakemake_from_another_directory_is_refused_before_any_job(campaign, tmp_path):
     config, results, (scene1, scene2) = campaign
     lock_path = results / LOCK_NAME
@@ -147,6 +148,7 @@ def test_second_snakemake_from_another_directory_is_refused_before_any_job(campa
     assert scene2.exists() and not lock_path.exists()
 
 
+@pytest.mark.slow
 def test_lock_left_by_a_killed_snakemake_is_taken_over(campaign, tmp_path):
     config, results, (scene1, scene2) = campaign
     lock_path = results / LOCK_NAME

@@ -78,6 +78,7 @@ def test_quoted_commas_are_one_field(tmp_path):
     assert read_table(path, ["detail"])["detail"].tolist() == ["one, two", "three"]
 
 
+@pytest.mark.slow
 def test_claims_command_refuses_a_cut_predictions_table(compare_dir, tmp_path):
     cut_mid_row(compare_dir / "all" / "predictions.csv")
     result = subprocess.run([sys.executable, "-m", "claims", "--compare", str(compare_dir), "--dem", str(tmp_path),
@@ -127,6 +128,7 @@ def test_one_missing_row_is_refused_with_the_sidecar_grid(case):
         read_series(path)
 
 
+@pytest.mark.slow
 def test_calibration_refuses_a_gappy_series_naming_it(tmp_path):
     dirs = synthetic.write_ensemble(tmp_path / "dem", default_params(), seeds=(1, 2), protocols=("heaviside",))
     drop_rows(dirs[1] / "heaviside.csv")
