@@ -35,6 +35,23 @@ include: "workflow/rules/pole_start.smk"
 include: "workflow/rules/accuracy.smk"
 
 
+# One writer per results folder, from any working directory (campaign/results_lock.py): only a
+# run that executes jobs takes the lock (not -n, --summary, --report); a second one exits with 5.
+from campaign import results_lock
+
+
+onstart:
+    results_lock.take_or_exit(RESULTS)
+
+
+onsuccess:
+    results_lock.give_back()
+
+
+onerror:
+    results_lock.give_back()
+
+
 rule all:
     input:
         all_targets() + pole_start_targets(),

@@ -197,6 +197,30 @@ def cell_problems(config: dict) -> list[str]:
     return out
 
 
+def loading_rate_problems(config: dict) -> list[str]:
+    """A loading with no rate names the two keys that give one (the schema's oneOf names neither)."""
+    loading = config.get("loading")
+    if not isinstance(loading, dict) or "inertial_numbers" in loading or "wall_velocities" in loading:
+        return []
+    return [problem("loading", None, "gives no shear rate", "loading.inertial_numbers (a list of I) or "
+                    "loading.wall_velocities (a list of wall speeds in m/s), one of the two",
+                    shown="no inertial_numbers, no wall_velocities")]
+
+
+#: Keys a periodic cell has no use for (yade_scripts/scene.py ``WALL_ONLY``): the scene file would drop them.
+WALL_ONLY_KEYS = (("sampling", "bulk_exclusion_d"),)
+
+
+def periodic_cell_key_problems(config: dict) -> list[str]:
+    """A wall cell's key given to a periodic cell is an error, as ``cell.mass`` given to a wall cell is."""
+    if (config.get("cell") or {}).get("kind", "walls") != "periodic":
+        return []
+    return [problem(f"{section}.{key}", config[section][key],
+                    "applies to a wall cell only (a periodic cell has no wall layers to leave out)",
+                    "leave it out, or set cell.kind: walls")
+            for section, key in WALL_ONLY_KEYS if key in (config.get(section) or {})]
+
+
 def _bulk_problems(H_over_d, bulk, gap):
     if H_over_d - 2 * bulk < 1:
         return [problem("sampling.bulk_exclusion_d", bulk,
@@ -491,14 +515,16 @@ def check(config: dict, configfiles=(), schema_path=SCHEMA, root=ROOT) -> list[s
     if "loading" in config and isinstance(config["loading"], dict):
         if "inertial_numbers" in config["loading"] and "wall_velocities" in config["loading"]:
             out.append("config error: loading: give inertial_numbers or wall_velocities, not both")
-    out += finite_problems(config)
-    # (the "not both" line above says what the schema's oneOf says at length)
+    rate = loading_rate_problems(config)
+    out += rate + finite_problems(config)
+    # (the "not both" and "no rate" lines say what the schema's oneOf says at length, or without the keys)
     out += [_schedule_hint(line, config) for line in schema_problems(config, schema_path)
-            if not (out and line.startswith("config error: loading: {") and "is valid under each of" in line)]
+            if not (out and line.startswith("config error: loading: {") and "is valid under each of" in line)
+            and not (rate and line.startswith("config error: loading: {") and "not valid under any of" in line)]
     if out:
         return out
-    for step in (results_dir_problems, loading_problems, cell_problems, protocol_problems,
-                 calibration_problems, options_problems, study_problems):
+    for step in (results_dir_problems, loading_problems, cell_problems, periodic_cell_key_problems,
+                 protocol_problems, calibration_problems, options_problems, study_problems):
         out += step(config, root) if step is results_dir_problems else step(config)
     if not out:
         out += sample_count_problems(config, root)  # (needs intervals in order and valid options)

@@ -26,6 +26,7 @@ import pandas as pd
 from dem_contract import (REVERSAL_PROTOCOLS, DEMInputError, pre_reversal_state, read_series, read_sidecar,
                           split_case_label, split_transients, steady_values)
 from dem_contract.derived import reversal_kinds
+from dem_contract.tables import read_table
 
 PREDICTION_COLUMNS = ("set", "case", "group", "seed", "protocol", "source", "s_rev", "A_xx", "A_xy", "A_norm",
                       "theta_A", "mu")
@@ -35,17 +36,8 @@ RATE_DEAD_BAND = 0.1   # samples with |gammadot| below this fraction of the run'
 
 
 def _read_csv(path, columns, what):
-    path = Path(path)
-    if not path.is_file():
-        raise DEMInputError(f"{path}: {what} not found")
-    try:
-        df = pd.read_csv(path)
-    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
-        raise DEMInputError(f"{path}: not a readable CSV ({exc})") from None
-    missing = [c for c in columns if c not in df.columns]
-    if missing:
-        raise DEMInputError(f"{path}: column(s) {', '.join(missing)} missing ({what}; expected {', '.join(columns)})")
-    return df
+    """A table of an earlier stage; a cut or ragged one is refused by file and line (``read_table``)."""
+    return read_table(path, columns, what)
 
 
 def comparison_sets(compare_dir) -> list:

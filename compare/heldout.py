@@ -19,10 +19,11 @@ in-sample errors and says so in ``note``.
 """
 from __future__ import annotations
 
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
+
+from dem_contract.tables import read_table
 
 from .dem import DEMInputError
 from .metrics import QUANTITIES
@@ -31,17 +32,10 @@ NEEDED = ("set", "level", "case", "group", "protocol", "in_sample", "model", "st
 
 
 def read_errors(paths) -> pd.DataFrame:
-    """Concatenate ``errors.csv`` files, checking their columns."""
+    """Concatenate ``errors.csv`` files, checking their columns (a cut or ragged file is refused by line)."""
     frames = []
     for path in paths:
-        path = Path(path)
-        if not path.is_file():
-            raise DEMInputError(f"{path}: file not found (an errors.csv of 'compare predict')")
-        df = pd.read_csv(path)
-        missing = [c for c in NEEDED if c not in df.columns]
-        if missing:
-            raise DEMInputError(f"{path}: missing column(s) {missing}; is it an errors.csv of 'compare predict'?")
-        frames.append(df)
+        frames.append(read_table(path, NEEDED, "an errors.csv of 'compare predict'"))
     if not frames:
         raise DEMInputError("no errors.csv given")
     return pd.concat(frames, ignore_index=True)

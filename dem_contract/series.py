@@ -74,7 +74,8 @@ def read_series(path, columns=CONTRACT_COLUMNS, min_samples: int = 2, what: str 
         ``min_samples`` rows; ``t`` not strictly increasing; a value outside
         its physical range (``BOUNDS``: |A_xx|, |A_xy| <= 1/2, p > 0,
         0 <= mu <= ``MU_MAX``); strain and t inconsistent with the integral of
-        gammadot (a jump; when ``strain`` and ``gammadot`` are read). Every
+        gammadot (a jump; when ``strain`` and ``gammadot`` are read); a gap
+        in the sampling grid (``_check_sampling_grid``: rows missing). Every
         message names the file and the data row (counted from 1 after the header).
     """
     columns = list(columns)
@@ -109,6 +110,7 @@ def read_series(path, columns=CONTRACT_COLUMNS, min_samples: int = 2, what: str 
     _check_bounds(path, data)
     if {"strain", "gammadot"} <= set(columns):
         _check_strain_integral(path, data)
+    _check_sampling_grid(path, data)
     return data
 
 
@@ -194,6 +196,57 @@ def _check_strain_integral(path: Path, data: pd.DataFrame) -> None:
             f"{path}: strain jumps by {ds[k]:+.6g} between data rows {rows[k] + 1} and {rows[k + 1] + 1} where "
             f"the rate integrates to {trap[k]:+.6g} over the time step: strain, t and gammadot disagree "
             f"(tolerance {tol[k]:.3g})")
+
+
+#: A gap in the sampling grid (rows missing from a series whose t, strain and gammadot still agree
+#: across it). With the sidecar's ``sampling_steps`` and ``dt`` (YADE runs) no time step may exceed
+#: the largest sampling interval by more than GRID_REL_TOL (rounding; one missing row doubles it);
+#: without them (model-made or imported series) no step may exceed GAP_FACTOR times the larger of
+#: its two neighbours (the grid changes from fine to coarse, but never in one step by this much
+#: on its own; the presets' coarse/fine ratios are 2.5 to 10, and a coarse stretch has several steps).
+GRID_REL_TOL = 0.01
+GAP_FACTOR = 3.0
+
+
+def _sidecar_max_step(path: Path) -> float | None:
+    """The largest sampling interval of a YADE series, in its time unit (from the sidecar), or None."""
+    side = path.with_suffix(".json")
+    try:
+        meta = json.loads(side.read_text()) if side.is_file() else {}
+        steps = [int(v) for v in (meta.get("sampling_steps") or {}).values() if v]
+        return max(steps) * float(meta["dt"]) / float(meta["time_unit_s"]) if steps else None
+    except (OSError, ValueError, TypeError, KeyError, AttributeError, ZeroDivisionError):
+        return None  # no usable sidecar: read_sidecar names a malformed one
+
+
+def _check_sampling_grid(path: Path, data: pd.DataFrame) -> None:
+    """No row is missing from the series' sampling grid (``GRID_REL_TOL``, ``GAP_FACTOR``).
+
+    Raises
+    ------
+    DEMInputError
+        Naming the two data rows around the gap, its length in t, and the
+        interval the grid allows there.
+    """
+    t = data["t"].to_numpy(dtype=float)
+    if len(t) < 3:
+        return
+    dt = np.diff(t)
+    max_step = _sidecar_max_step(path)
+    if max_step is not None:
+        allowed = np.full_like(dt, (1 + GRID_REL_TOL) * max_step)
+        rule = "the largest sampling interval of the sidecar's sampling_steps"
+    else:
+        neighbours = np.maximum(np.concatenate([[0.0], dt[:-1]]), np.concatenate([dt[1:], [0.0]]))
+        allowed = GAP_FACTOR * neighbours
+        rule = f"{GAP_FACTOR:g} times the larger neighbouring step"
+    bad = dt > allowed
+    if bad.any():
+        k = int(np.argmax(bad))
+        raise DEMInputError(
+            f"{path}: a gap in the sampling grid between data rows {k + 1} and {k + 2} (t {t[k]:.6g} to "
+            f"{t[k + 1]:.6g}: a step of {dt[k]:.6g}, at most {allowed[k]:.6g} allowed, {rule}): rows are "
+            f"missing ({int(bad.sum())} gap(s) in all)")
 
 
 def read_sidecar(path) -> dict:

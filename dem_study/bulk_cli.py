@@ -15,6 +15,9 @@ import yaml
 
 import pandas as pd
 
+from dem_contract import DEMInputError
+from dem_contract.tables import read_table
+
 from . import bulk, bulk_cells, bulk_cost, bulk_figures, grid
 from .analysis import StudyInputError, strain_edges
 from .cli import _read_yaml
@@ -45,7 +48,10 @@ def estimate(args) -> int:
 
 
 def cost(args) -> int:
-    cases = pd.read_csv(args.cases)
+    try:  # a cut or ragged table is refused by line
+        cases = read_table(args.cases, what="the cases table")
+    except DEMInputError as exc:
+        raise StudyInputError(str(exc)) from None
     table = bulk_cost.cost_table(cases, args.bulk_dir)
     table.to_csv(args.out, index=False, float_format="%.6g")
     print(table[["case", "N", "cpu_time_s", "wall_time_s"]].to_string())
@@ -54,10 +60,10 @@ def cost(args) -> int:
 
 
 def analyse(args) -> int:
-    try:
-        cases = pd.read_csv(args.cases)
-    except (OSError, pd.errors.ParserError, pd.errors.EmptyDataError) as exc:
-        raise StudyInputError(f"{args.cases}: not a readable cases table ({str(exc).strip()})") from None
+    try:  # a cut or ragged table is refused by line
+        cases = read_table(args.cases, what="the cases table")
+    except DEMInputError as exc:
+        raise StudyInputError(str(exc)) from None
     need = {"case", "cell", "seed", "kind", "H_over_d", "W_over_d"} - set(cases.columns)
     if need:
         raise StudyInputError(f"{args.cases}: missing columns {', '.join(sorted(need))} "

@@ -6,8 +6,10 @@ import json
 import sys
 from pathlib import Path
 
-import pandas as pd
 import yaml
+
+from dem_contract import DEMInputError
+from dem_contract.tables import read_table
 
 from . import analysis, figures, grid
 
@@ -49,12 +51,10 @@ def analyse(args) -> int:
     points_file = _input_file(args.points, "points table (--points)")
     if not Path(args.dem_dir).is_dir():
         raise analysis.StudyInputError(f"{args.dem_dir}: DEM folder (--dem-dir) not found")
-    try:
-        points = pd.read_csv(points_file)
-    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
-        raise analysis.StudyInputError(f"{points_file}: not a readable CSV ({str(exc).strip()})") from None
-    if "point" not in points.columns:
-        raise analysis.StudyInputError(f"{points_file}: missing column 'point' (the table of grid.expand)")
+    try:  # a cut or ragged table is refused by line
+        points = read_table(points_file, ["point"], "the points table of grid.expand")
+    except DEMInputError as exc:
+        raise analysis.StudyInputError(str(exc)) from None
     tol = _tolerance(args.tolerance)
     edges = analysis.strain_edges(args.heaviside_strain, args.transient_bin)
     results = {p: analysis.load_point(Path(args.dem_dir) / p, p, args.steady_window, edges)

@@ -28,8 +28,13 @@ CALIBRATION_EXTRA = {
     "identifiability": "identifiability.csv",
 }
 # calibration.freeform: the free-form alpha1(X), alpha2(X) fit (calibrate/freeform.py), its table
-# beside the others and its curves on Figs. 3a, 3b.
+# beside the others and its curves on Figs. 3a, 3b. freeform.csv is declared either way (without
+# the option the rule writes its header and one note row, as calibrate does for a fit it cannot
+# run), so a toggle changes only params and the params trigger reruns every set: an output
+# declared only with the option has no metadata in a finished set, and Snakemake then checks
+# neither its params nor, unless a target asks for it, that the file is missing.
 CALIBRATION_FREEFORM = bool(config.get("calibration", {}).get("freeform", False))
+FREEFORM_NOT_ASKED = "section,key,value,low,high,n,detail\nnote,not requested,,,,,calibration.freeform is false"
 # calibrate writes heldout_scores.csv only when a bootstrap replicate held a seed
 # out (never with one seed): the rule then leaves its header alone in the file.
 HELDOUT_HEADER = "replicate,route,model,n_heldout_runs"
@@ -67,17 +72,15 @@ rule calibrate:
             for name in CALIBRATION_FIGURES
         ],
         **{key: f"{RESULTS}/calibration/{{calset}}/{name}" for key, name in CALIBRATION_EXTRA.items()},
-        **(
-            {
-                "freeform": report(
-                    f"{RESULTS}/calibration/{{calset}}/freeform.csv",
-                    caption="../report/freeform.rst",
-                    category="Calibration",
-                    subcategory="{calset}",
-                )
-            }
+        freeform=(
+            report(
+                f"{RESULTS}/calibration/{{calset}}/freeform.csv",
+                caption="../report/freeform.rst",
+                category="Calibration",
+                subcategory="{calset}",
+            )
             if CALIBRATION_FREEFORM
-            else {}
+            else f"{RESULTS}/calibration/{{calset}}/freeform.csv"
         ),
     params:
         dirs=lambda wc: [case_dir(label) for label in CALIBRATION_SETS[wc.calset]["cases"]],
@@ -97,7 +100,9 @@ rule calibrate:
         "{PY} -m calibrate --dem {params.dirs} --protocols {params.protocols}"
         " --out {params.out} {params.freeform} {params.options} > {log} 2>&1"
         " && {{ test -e {output.heldout} || echo {HELDOUT_HEADER} > {output.heldout}; }}"
+        " && {{ test -e {output.freeform} || printf '{FREEFORM_NOT_ASKED}\\n' > {output.freeform}; }}"
 
 
 def calibration_targets():
-    return [calibration_params(name) for name in CALIBRATION_SETS]
+    """Every declared output of every set: a missing one (an output new to the rule) reruns its set."""
+    return [str(path) for name in CALIBRATION_SETS for path in expand(rules.calibrate.output, calset=name)]

@@ -1,0 +1,123 @@
+"""A calibration option edit reruns every calibration set it changes, and only those.
+
+A finished calibration of two sets ("all" and "heaviside_only") is made once by
+Snakemake's own calibrate rule (real ``python -m calibrate``, light options)
+on model-made DEM series (``dem_contract.synthetic``, three seeds) written where
+the campaign keeps its DEM results; ``--allowed-rules calibrate`` takes them as
+given, so no YADE runs. Each test edits a copy of the config and asks Snakemake
+(dry run, default rerun triggers) which sets it would recalibrate, and
+``--summary`` whether a declared output is missing while nothing is planned for it.
+"""
+import copy
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import yaml
+
+from dem_contract import synthetic
+from model import default_params
+
+ROOT = Path(__file__).resolve().parents[1]
+SNAKEMAKE = [sys.executable, "-m", "snakemake"]
+GROUP = "p100000_I0.01"
+
+CONFIG = {
+    "campaign": "tiny",
+    "loading": {"pressures": [1.0e5], "inertial_numbers": [1.0e-2]},
+    "seeds": [1, 2, 3],
+    "cell": {"H_over_d": 5, "W_over_H": 2},
+    "material": {"diameter": 1.0e-3, "density": 2500.0, "kappa": 1.0e3, "kt_over_kn": 0.5,
+                 "restitution": 0.5, "friction": 0.45, "size_ratio_min": 0.5, "size_ratio_max": 1.5},
+    "timestep": {"dt_over_tc": 0.1},
+    "pack": {"initial_solid_fraction": 0.4, "solid_fraction_guess": 0.8},
+    "preshear": {"strain": 0.2},
+    "protocols": {"heaviside": {"strain": 0.5}, "sinusoidal": {"strain": 0.5, "transition_strain": 0.1}},
+    "sampling": {"fine_interval": 0.001, "fine_window": 0.05, "coarse_interval": 0.002, "bulk_exclusion_d": 1},
+    "run": {"checkpoint_every_s": 60, "progress_every_s": 10},
+    "calibration": {
+        "sets": {"heaviside_only": {"protocols": ["heaviside"]}},
+        "options": "--bootstrap 2 --bootstrap-evals 20 --route2-evals 40 --profile-points 3 --profile-evals 10",
+        "freeform": False,
+    },
+    "accuracy": {"ode_work_precision": False},
+}
+
+pytestmark = pytest.mark.slow  # about a minute of calibration, then a dry run and a summary per edit
+
+
+def write(config, path):
+    path.write_text(yaml.safe_dump(config))
+    return path
+
+
+def targets(config):
+    """params.yaml of every set of ``config`` (what the comparison asks for)."""
+    sets = ["all", *config["calibration"].get("sets", {})]
+    return [f"{config['results_dir']}/calibration/{name}/params.yaml" for name in sets]
+
+
+def snakemake(config, path, *args):
+    return subprocess.run([*SNAKEMAKE, *targets(config), "--allowed-rules", "calibrate",
+                           "--configfile", str(write(config, path)), *args],
+                          cwd=ROOT, capture_output=True, text=True, timeout=600)
+
+
+@pytest.fixture(scope="module")
+def finished(tmp_path_factory):
+    """Two calibration sets, calibrated to the end; returns (config, its folder)."""
+    tmp = tmp_path_factory.mktemp("calreruns")
+    config = copy.deepcopy(CONFIG)
+    config["results_dir"] = str(tmp / "results")
+    synthetic.write_ensemble(tmp / "results" / "dem", default_params(), seeds=(1, 2, 3), group=GROUP, I=0.01,
+                             fabric_noise=synthetic.FABRIC_NOISE, mu_noise=synthetic.MU_NOISE)
+    result = snakemake(config, tmp / "config.yaml", "-j1")
+    assert result.returncode == 0, result.stdout[-2000:] + result.stderr[-3000:]
+    return config, tmp
+
+
+def planned_sets(finished, edit, name):
+    """The sets a dry run recalibrates after ``edit(config)``; asserts no declared output is
+    missing while Snakemake plans nothing for it (``--summary``: status missing, plan no update)."""
+    config, tmp = finished
+    changed = copy.deepcopy(config)
+    edit(changed)
+    dry = snakemake(changed, tmp / f"{name}.yaml", "-n")
+    assert dry.returncode == 0, dry.stdout[-2000:] + dry.stderr[-2000:]
+    summary = snakemake(changed, tmp / f"{name}.yaml", "--summary")
+    assert summary.returncode == 0, summary.stderr[-2000:]
+    stale = [line.split("\t")[0] for line in summary.stdout.splitlines()
+             if line.split("\t")[-2:] == ["missing", "no update"]]
+    assert not stale, f"declared but missing, and not planned: {stale}"
+    return set(re.findall(r"wildcards: calset=(\S+)", dry.stdout))
+
+
+def test_unchanged_config_recalibrates_nothing(finished):
+    assert planned_sets(finished, lambda c: None, "same") == set()
+
+
+@pytest.mark.parametrize("name, edit", [
+    ("freeform_on", lambda c: c["calibration"].update(freeform=True)),
+    ("options", lambda c: c["calibration"].update(options=c["calibration"]["options"].replace(
+        "--bootstrap 2", "--bootstrap 3"))),
+])
+def test_calibration_option_edit_recalibrates_every_set(finished, name, edit):
+    assert planned_sets(finished, edit, name) == {"all", "heaviside_only"}
+
+
+def test_set_protocol_edit_recalibrates_that_set_only(finished):
+    edit = lambda c: c["calibration"]["sets"]["heaviside_only"].update(protocols=["heaviside", "sinusoidal"])  # noqa: E731
+    assert planned_sets(finished, edit, "protocols") == {"heaviside_only"}
+
+
+def test_new_set_calibrates_that_set_only(finished):
+    edit = lambda c: c["calibration"]["sets"].update(sinusoidal_only={"protocols": ["sinusoidal"]})  # noqa: E731
+    assert planned_sets(finished, edit, "new_set") == {"sinusoidal_only"}
+
+
+def test_a_set_without_its_free_form_fit_says_so_in_freeform_csv(finished):
+    config, _ = finished
+    lines = Path(config["results_dir"], "calibration", "heaviside_only", "freeform.csv").read_text().splitlines()
+    assert lines == ["section,key,value,low,high,n,detail", "note,not requested,,,,,calibration.freeform is false"]
