@@ -16,9 +16,11 @@ import scene as scenemod  # noqa: E402  (pure Python, no YADE)
 TINY = json.loads((YS / "examples" / "tiny.json").read_text())
 
 
-def yade(*args, cwd=None, timeout=300):
+def yade(script, *args, cwd=None, timeout=300):
+    """run_stage.py as the workflow runs it (python3, YADE as a library); a tool under the yade launcher."""
     env = dict(os.environ, OMP_NUM_THREADS="1")
-    return subprocess.run(["yade", "-n", "-x", *map(str, args)], capture_output=True, text=True,
+    cmd = ["python3"] if Path(script).name == "run_stage.py" else ["yade", "-n", "-x"]
+    return subprocess.run([*cmd, str(script), *map(str, args)], capture_output=True, text=True,
                           cwd=cwd, timeout=timeout, env=env)
 
 
@@ -70,6 +72,17 @@ def test_bad_scene_stops_yade_before_building(tmp_path):
     assert not (tmp_path / "case").exists()  # nothing built, nothing written
     r = yade(YS / "run_stage.py", write(tmp_path, TINY), "preshear", tmp_path / "case")
     assert r.returncode == 2 and "pack.final.yade.gz" in r.stderr  # missing input named
+
+
+def test_stage_refuses_to_run_under_the_yade_launcher(tmp_path):
+    """`yade -x` opens a TCP Python prompt and an XMLRPC server before it runs a script:
+    run_stage.py stops at once (exit 2, nothing written) and names the command to use."""
+    env = dict(os.environ, OMP_NUM_THREADS="1")
+    r = subprocess.run(["yade", "-n", "-x", str(YS / "run_stage.py"), str(write(tmp_path, TINY)), "pack",
+                        str(tmp_path / "case")], capture_output=True, text=True, timeout=300, env=env)
+    assert r.returncode == 2, r.stdout + r.stderr
+    assert "not run by the yade launcher" in r.stderr and "python3 yade_scripts/run_stage.py" in r.stderr
+    assert not (tmp_path / "case").exists()
 
 
 ENGINE_CASES = [

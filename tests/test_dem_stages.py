@@ -37,10 +37,17 @@ def make_scene(example="tiny.json"):
     return sc
 
 
+def command(script, *args):
+    """The command line of a script: run_stage.py as the workflow runs it (python3, YADE imported
+    as a library, no remote servers), any other script (an inspection) under the yade launcher."""
+    if Path(script).name == "run_stage.py":
+        return ["python3", str(script), *map(str, args)]
+    return ["yade", "-n", "-x", str(script), *map(str, args)]
+
+
 def yade(*args, timeout=600):
     env = dict(os.environ, OMP_NUM_THREADS="1")
-    return subprocess.run(["yade", "-n", "-x", *map(str, args)], capture_output=True, text=True,
-                          timeout=timeout, env=env)
+    return subprocess.run(command(*args), capture_output=True, text=True, timeout=timeout, env=env)
 
 
 def read(path):
@@ -308,7 +315,7 @@ def kill_preshear_after_first_checkpoint(scene, cdir, stage="preshear", ready=No
     (its first for which ``ready(resume.json's dict)`` is true, if given); return its PID."""
     resume = Path(cdir) / ".partial" / stage / "resume.json"
     env = dict(os.environ, OMP_NUM_THREADS="1")
-    proc = subprocess.Popen(["yade", "-n", "-x", str(RUN), str(scene), stage, str(cdir)],
+    proc = subprocess.Popen(command(RUN, scene, stage, cdir),
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
 
     def checkpointed():
