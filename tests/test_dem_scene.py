@@ -10,6 +10,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 YS = ROOT / "yade_scripts"
+TOOLS = ROOT / "tools"
 sys.path.insert(0, str(YS))
 import scene as scenemod  # noqa: E402  (pure Python, no YADE)
 
@@ -17,10 +18,9 @@ TINY = json.loads((YS / "examples" / "tiny.json").read_text())
 
 
 def yade(script, *args, cwd=None, timeout=300):
-    """run_stage.py as the workflow runs it (python3, YADE as a library); a tool under the yade launcher."""
+    """run_stage.py or a tool as the workflow runs them: python3, YADE imported as a library."""
     env = dict(os.environ, OMP_NUM_THREADS="1")
-    cmd = ["python3"] if Path(script).name == "run_stage.py" else ["yade", "-n", "-x"]
-    return subprocess.run([*cmd, str(script), *map(str, args)], capture_output=True, text=True,
+    return subprocess.run(["python3", str(script), *map(str, args)], capture_output=True, text=True,
                           cwd=cwd, timeout=timeout, env=env)
 
 
@@ -108,7 +108,7 @@ ENGINE_CASES = [
 def test_engine_list_holds_only_declared_effects(tmp_path, effects, stage, expected):
     sc = copy.deepcopy(TINY)
     sc["effects"] = effects
-    r = yade(YS / "show_engines.py", write(tmp_path, sc), stage)
+    r = yade(TOOLS / "show_engines.py", write(tmp_path, sc), stage)
     assert r.returncode == 0, r.stderr
     line = [ln for ln in r.stdout.splitlines() if ln.startswith("ENGINES ")][0]
     assert json.loads(line[len("ENGINES "):]) == expected
@@ -117,7 +117,7 @@ def test_engine_list_holds_only_declared_effects(tmp_path, effects, stage, expec
 def test_restitution_at_the_chosen_time_step(tmp_path):
     """Two disks of diameter d rebound with e = 0.5 within 0.03 at dt = 0.1 sqrt(m_d/kn)."""
     out = tmp_path / "e.json"
-    r = yade(YS / "restitution.py", YS / "examples" / "tiny.json", out)
+    r = yade(TOOLS / "restitution.py", YS / "examples" / "tiny.json", out)
     assert r.returncode == 0, r.stderr
     res = json.loads(out.read_text())
     assert res["dt_over_tc"] == 0.1
