@@ -97,12 +97,24 @@ def assert_complete_on_grid(cdir, strain):
     return side
 
 
+@pytest.fixture(scope="module")
+def uninterrupted(packed, tmp_path_factory):
+    """The pre-shear to strain 2.0 of new_case, run without interruption: its CSV's bytes."""
+    scene, cdir = new_case(packed, tmp_path_factory.mktemp("uninterrupted"), strain=2.0)
+    r = yade(RUN, scene, "preshear", cdir)
+    assert r.returncode == 0, r.stderr[-2000:]
+    return (cdir / "preshear.csv").read_bytes()
+
+
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT])
-def test_signal_writes_a_checkpoint_exits_4_and_the_rerun_resumes(packed, tmp_path, sig):
+def test_signal_writes_a_checkpoint_exits_4_and_the_rerun_resumes_to_the_same_bit(packed, uninterrupted,
+                                                                                    tmp_path, sig):
+    """The signal rewinds to the last reload point (every 10,000 steps, past which 80 rows lie
+    on this cell) and checkpoints there; the resumed series is the uninterrupted one's."""
     scene, cdir = new_case(packed, tmp_path, strain=2.0)
     proc = start(scene, cdir)
     try:
-        wait_for_rows(cdir, 60, proc)
+        wait_for_rows(cdir, 80, proc)
         t0 = time.time()
         proc.send_signal(sig)
         out, err = proc.communicate(timeout=30)
@@ -124,6 +136,7 @@ def test_signal_writes_a_checkpoint_exits_4_and_the_rerun_resumes(packed, tmp_pa
     assert "stale lock" not in r.stdout  # the interrupted stage released its lock
     side = assert_complete_on_grid(cdir, 2.0)
     assert side["resumed"] == 1
+    assert (cdir / "preshear.csv").read_bytes() == uninterrupted
 
 
 def test_second_process_on_a_stage_is_refused_and_leaves_the_first_ones_log_intact(packed, tmp_path):

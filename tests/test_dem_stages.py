@@ -287,7 +287,7 @@ def test_same_seed_same_packing(tmp_path):
 
 def _case_from_pack(case, tmp_path, **changes):
     cdir = tmp_path / "case"
-    cdir.mkdir()
+    cdir.mkdir(parents=True)
     for f in ("pack.final.yade.gz", "pack.json"):
         shutil.copy(case["dir"] / f, cdir / f)
     sc = make_scene()
@@ -356,7 +356,12 @@ def assert_resumed_without_gap_or_duplicate(cdir):
     return s, side
 
 
-def test_killed_stage_resumes_without_gap_or_duplicate(case, tmp_path):
+def test_killed_stage_resumes_without_gap_or_duplicate_to_the_same_bit(case, tmp_path):
+    """SIGKILL after the first checkpoint, then a rerun: the series is the uninterrupted run's,
+    byte for byte (every run reloads its state where checkpoints are taken: checkpoint.py)."""
+    ref_scene, ref_dir = _case_from_pack(case, tmp_path / "ref", preshear=dict(strain=2.5))
+    r = yade(RUN, ref_scene, "preshear", ref_dir)
+    assert r.returncode == 0, r.stderr[-2000:]
     scene, cdir = _case_from_pack(case, tmp_path, preshear=dict(strain=2.5), run=dict(checkpoint_every_s=1))
     pid = kill_preshear_after_first_checkpoint(scene, cdir)
     assert not (cdir / "preshear.csv").exists()
@@ -367,3 +372,4 @@ def test_killed_stage_resumes_without_gap_or_duplicate(case, tmp_path):
     s, side = assert_resumed_without_gap_or_duplicate(cdir)
     t, strain = s["t"], s["strain"]
     assert strain[-1] == pytest.approx(2.5, rel=0.05)
+    assert (cdir / "preshear.csv").read_bytes() == (ref_dir / "preshear.csv").read_bytes()

@@ -5,6 +5,17 @@ plus the number of CSV rows it covers (resume.json); a rerun loads it, cuts the
 partial CSV back to those rows and goes on, so the series has no gap and no
 duplicated row. Two checkpoint files alternate, so a kill while saving leaves the
 previous one whole. A mixin of stages.Stage.
+
+A loaded state is not the live one bit for bit: YADE saves the contacts, but not
+its collider's sorted bounds, so after a load the collider finds new contacts in
+another order, the interaction container's order differs from the live run's
+within a step or two, and so does the order in which contact forces are summed
+on each disk (rounding: 1e-17 after a few steps, then chaos). So every run
+reloads its own state at a fixed grid of steps, every RELOAD_EVERY steps since
+the stage's start (`reload`: saved in memory, loaded back), and checkpoints are
+taken only at those points: a resumed run then starts from exactly the state the
+uninterrupted run continued from, and the two series are byte-identical. A
+signal (SIGTERM, SIGINT) rewinds to the last reload point and checkpoints there.
 """
 import json
 import os
@@ -16,6 +27,8 @@ import measure
 from yade.wrapper import Omega
 
 O = Omega()
+RELOAD_EVERY = 10000  # steps between reloads (about 120 steps' cost each: ~1 %), the checkpoint grid
+SLOT = "ys_reload"  # the in-memory save (O.saveTmp) of the last reload point
 
 
 def save_state(path):
@@ -68,22 +81,18 @@ class Checkpoints:
         else:
             ck = os.path.join(self.partial, resume["checkpoint"])
             O.load(ck)
-            self.lay = build.layout()
             self.st = json.loads(O.tags["ys_state"])
             self.st["resumed"] += 1
             self._truncate_csv(self.st["rows"])
             print(f"[{self.stage}] resumed from {resume['checkpoint']} at iteration {O.iter}, "
                   f"strain {self.st['strain']:.5f}, {self.st['rows']} rows kept", flush=True)
-        O.dt = self.st["dt"]
-        build.set_wall_load(self.lay, self.st["load"])
-        self.bulk = measure.bulk_for(self.lay, self.der["d"])
         self.csv = open(self.csv_path, "a")
         self.t_wall0 = time.time()
         self.cpu0 = time.process_time()
         self.iter_wall0 = O.iter
         self.last_progress = self.t_wall0
         self.last_checkpoint = self.t_wall0
-        self._install_engines()
+        self.reload()  # a fresh start too: a resume from this point sees the same state
 
     def _csv_has_rows(self, rows):
         if not os.path.isfile(self.csv_path):
@@ -119,3 +128,25 @@ class Checkpoints:
         self.last_checkpoint = now
         print(f"[{self.stage}] checkpoint at iteration {O.iter} ({st['rows']} rows, "
               f"written in {time.time() - now:.2f} s)", flush=True)
+
+    def reload(self):
+        """Save the state in memory, load it back, and set what a load does not restore (the
+        wall load, a permanent force; the engines, built anew as at a resume): the state a
+        resume from a checkpoint written here starts from. Between steps only."""
+        O.tags["ys_state"] = json.dumps(self.st)
+        O.saveTmp(SLOT)
+        O.loadTmp(SLOT)
+        self.lay = build.layout()
+        O.dt = self.st["dt"]
+        build.set_wall_load(self.lay, self.st["load"])
+        self.bulk = measure.bulk_for(self.lay, self.der["d"])
+        self._install_engines()
+
+    def next_reload(self):
+        """Steps since the stage's start of the next reload point."""
+        return ((O.iter - self.st["iter0"]) // RELOAD_EVERY + 1) * RELOAD_EVERY
+
+    def rewind(self):
+        """Back to the last reload point (its state and controller state), to checkpoint there."""
+        O.loadTmp(SLOT)
+        self.st = json.loads(O.tags["ys_state"])

@@ -108,6 +108,8 @@ class Stage(Packing, Shearing, Sampling, Checkpoints, Outputs):
             boundary = self._next_boundary()
             if boundary is not None:
                 n = min(n, boundary - (O.iter - st["iter0"]))
+            reload_at = self.next_reload()
+            n = min(n, reload_at - (O.iter - st["iter0"]))
             i0, w0 = O.iter, time.time()
             if n > 0:
                 O.run(n, True)
@@ -120,9 +122,12 @@ class Stage(Packing, Shearing, Sampling, Checkpoints, Outputs):
                 chunk = max(1, min(10 * chunk, int((O.iter - i0) * CHUNK_S / max(elapsed, 1e-3))))
             if lock is not None:
                 lock.touch()
-            if self.want_checkpoint and not self.done:
-                self.want_checkpoint = False
-                self.checkpoint()
+            done = O.iter - st["iter0"]
+            if done >= reload_at and done < st["n_steps"] and not self.done:
+                if self.want_checkpoint:  # checkpoints only where every run reloads (checkpoint.py)
+                    self.want_checkpoint = False
+                    self.checkpoint()
+                self.reload()
             if O.iter - i0 < n and not self.done and n > 0:
                 raise RuntimeError(f"the run stopped early at iteration {O.iter}")
         if self.stage == "pack" and not self.done:
@@ -134,7 +139,11 @@ class Stage(Packing, Shearing, Sampling, Checkpoints, Outputs):
         self.finish()
 
     def interrupt(self):
-        """A signal arrived: checkpoint now (between steps), then raise Interrupted."""
+        """A signal arrived: back to the last reload point, checkpoint there, raise Interrupted.
+
+        The steps since that point are lost (at most RELOAD_EVERY) and done again, to the
+        same bit, by the resumed run."""
+        self.rewind()
         self.checkpoint()
         name = signal.Signals(SIGNALS[0][0]).name
         raise Interrupted(f"{name} received: checkpoint at iteration {O.iter} ({self.st['rows']} rows) "
