@@ -8,18 +8,21 @@ the wall speed (at once, or through a per-step half cosine).
 
 One controller per process, the class Stage, split by concern into one mixin per
 module: packing (the pack's phases), shearing (wall speeds, reversal schedules),
-sampling (engines, rows, guards, progress), checkpoint (resume), outputs (final
-files, sidecar); this module holds the start and the run loop. The controller
-runs inside a PyRunner at the sampling interval: writes one CSV row, checks the guards, prints progress and, every
-run.checkpoint_every_s, asks for a checkpoint. Its state lives in O.tags so that a
-checkpoint carries it and a killed stage resumes exactly at its last checkpoint.
+sampling (engines, rows, guards, progress), checkpoint (reloads, checkpoints,
+resume), outputs (final files, sidecar); this module holds the start and the run
+loop. The controller runs inside a PyRunner at the sampling interval: writes one
+CSV row, checks the guards, prints progress and, every run.checkpoint_every_s,
+asks for a checkpoint. Its state lives in O.tags so that a checkpoint carries it
+and a killed stage resumes exactly at its last checkpoint.
 
 The run loop advances the simulation in chunks of about CHUNK_S of wall time
-(`O.run(n, True)` stops after a whole step). Python runs signal handlers only
-between chunks (not while the main thread waits in YADE's C++), so SIGTERM and
-SIGINT (see `install_signal_handlers`) are acted on at the end of the current
-chunk: a checkpoint is written and the stage raises Interrupted (exit code 4).
-Periodic checkpoints are written at chunk ends too, never inside a step.
+(`O.run(n, True)` stops after a whole step), cut at segment boundaries and at the
+reload points (every checkpoint.RELOAD_EVERY steps), where the state is reloaded
+and a checkpoint, if asked for, written. Python runs signal handlers only between
+chunks (not while the main thread waits in YADE's C++), so SIGTERM and SIGINT (see
+`install_signal_handlers`) are acted on at the end of the current chunk: the stage
+goes back to the last reload point, checkpoints it and raises Interrupted (exit
+code 4). Checkpoints are never written inside a step.
 """
 import os
 import signal
