@@ -124,7 +124,13 @@ if __name__ == "__main__":  # also under the launcher (`yade -x` runs a script a
         except yadelib.YadeNotFound as e:
             print(f"YADE not found: {e}", file=sys.stderr)
             os._exit(2)
-    rc = main(sys.argv[1:])
+    try:
+        rc = main(sys.argv[1:])
+    except Exception:  # exit code 1, with the traceback (in the log once it is open)
+        import traceback
+
+        traceback.print_exc()
+        rc = 1
     sys.stdout.flush()
     sys.stderr.flush()
     os._exit(rc)  # YADE's threads are not joined at exit: leave at once with the stage's code
