@@ -10,15 +10,17 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 YS = ROOT / "yade_scripts"
+TOOLS = ROOT / "tools"
 sys.path.insert(0, str(YS))
 import scene as scenemod  # noqa: E402  (pure Python, no YADE)
 
 TINY = json.loads((YS / "examples" / "tiny.json").read_text())
 
 
-def yade(*args, cwd=None, timeout=300):
+def yade(script, *args, cwd=None, timeout=300):
+    """run_stage.py or a tool as the workflow runs them: python3, YADE imported as a library."""
     env = dict(os.environ, OMP_NUM_THREADS="1")
-    return subprocess.run(["yade", "-n", "-x", *map(str, args)], capture_output=True, text=True,
+    return subprocess.run(["python3", str(script), *map(str, args)], capture_output=True, text=True,
                           cwd=cwd, timeout=timeout, env=env)
 
 
@@ -72,6 +74,17 @@ def test_bad_scene_stops_yade_before_building(tmp_path):
     assert r.returncode == 2 and "pack.final.yade.gz" in r.stderr  # missing input named
 
 
+def test_stage_refuses_to_run_under_the_yade_launcher(tmp_path):
+    """`yade -x` opens a TCP Python prompt and an XMLRPC server before it runs a script:
+    run_stage.py stops at once (exit 2, nothing written) and names the command to use."""
+    env = dict(os.environ, OMP_NUM_THREADS="1")
+    r = subprocess.run(["yade", "-n", "-x", str(YS / "run_stage.py"), str(write(tmp_path, TINY)), "pack",
+                        str(tmp_path / "case")], capture_output=True, text=True, timeout=300, env=env)
+    assert r.returncode == 2, r.stdout + r.stderr
+    assert "not run by the yade launcher" in r.stderr and "python3 yade_scripts/run_stage.py" in r.stderr
+    assert not (tmp_path / "case").exists()
+
+
 ENGINE_CASES = [
     ({}, "preshear", ["ForceResetter", "InsertionSortCollider",
                       "InteractionLoop[Ig2_Sphere_Sphere_ScGeom,Ip2_ViscElMat_ViscElMat_ViscElPhys,"
@@ -95,7 +108,7 @@ ENGINE_CASES = [
 def test_engine_list_holds_only_declared_effects(tmp_path, effects, stage, expected):
     sc = copy.deepcopy(TINY)
     sc["effects"] = effects
-    r = yade(YS / "show_engines.py", write(tmp_path, sc), stage)
+    r = yade(TOOLS / "show_engines.py", write(tmp_path, sc), stage)
     assert r.returncode == 0, r.stderr
     line = [ln for ln in r.stdout.splitlines() if ln.startswith("ENGINES ")][0]
     assert json.loads(line[len("ENGINES "):]) == expected
@@ -104,7 +117,7 @@ def test_engine_list_holds_only_declared_effects(tmp_path, effects, stage, expec
 def test_restitution_at_the_chosen_time_step(tmp_path):
     """Two disks of diameter d rebound with e = 0.5 within 0.03 at dt = 0.1 sqrt(m_d/kn)."""
     out = tmp_path / "e.json"
-    r = yade(YS / "restitution.py", YS / "examples" / "tiny.json", out)
+    r = yade(TOOLS / "restitution.py", YS / "examples" / "tiny.json", out)
     assert r.returncode == 0, r.stderr
     res = json.loads(out.read_text())
     assert res["dt_over_tc"] == 0.1

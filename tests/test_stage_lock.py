@@ -62,3 +62,20 @@ def test_release_removes_the_lock_and_an_empty_partial_folder_only(tmp_path):
     lk.release()
     assert not (tmp_path / ".partial" / "preshear.lock").exists()
     assert (tmp_path / ".partial" / "preshear").is_dir()
+
+
+def test_lock_naming_a_live_process_that_holds_no_flock_is_taken_over(tmp_path):
+    """Liveness is the flock, not the PID in the file: after a crash the PID may name an
+    unrelated live process (reused), and the stage must still start."""
+    lock_file = tmp_path / ".partial" / "preshear.lock"
+    lock_file.parent.mkdir()
+    other = subprocess.Popen(["sleep", "30"])
+    try:
+        lock_file.write_text(json.dumps(dict(pid=other.pid, host=os.uname().nodename, started="before")))
+        lines = []
+        old = stagelock.StageLock(tmp_path, "preshear", log=lines.append).acquire()
+        assert other.poll() is None  # still alive, and its PID did not keep the stage
+    finally:
+        other.kill()
+        other.wait()
+    assert old["pid"] == other.pid and f"stale lock of PID {other.pid}" in lines[0]

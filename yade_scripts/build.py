@@ -24,17 +24,16 @@ class PlacementError(RuntimeError):
     pass
 
 
-def contact_material(scene, radius):
-    """ViscElMat for a disk of this radius, with young = kn/R.
+def contact_material(scene, der, radius):
+    """ViscElMat for a disk of this radius, with young = kn/R (kn = kappa p d, scene.derived).
 
     YADE's Ip2 gives each side k_i = 2 E_i R_i = 2 kn, and the two combine in
     series to kn whatever the radii; poisson = kt/kn gives ks = kt; en = et =
     restitution becomes a dashpot from the masses of each pair.
     """
-    m, d = scene["material"], scene["material"]["diameter"]
-    kn = m["kappa"] * m["pressure"] * d
+    m, kn = scene["material"], der["kn"]
     if m["contact_law"] == "frictvisco":
-        return frictvisco_material(scene, radius)
+        return frictvisco_material(scene, der, radius)
     mat = ViscElMat(
         young=kn / radius, poisson=m["kt_over_kn"], en=m["restitution"], et=m["restitution"],
         frictionAngle=math.atan(m["friction"]), density=m["density"])
@@ -45,7 +44,7 @@ def contact_material(scene, radius):
     return O.materials.append(mat)
 
 
-def frictvisco_material(scene, radius):
+def frictvisco_material(scene, der, radius):
     """FrictViscoMat for a disk of this radius: the same kn, kt and Coulomb friction as ViscElMat.
 
     Ip2_FrictViscoMat gives kn = E_1 R_1 E_2 R_2 / (E_1 R_1 + E_2 R_2) * 2 = kn with E = kn/R,
@@ -53,8 +52,7 @@ def frictvisco_material(scene, radius):
     beta = -ln e / sqrt(pi^2 + ln^2 e), the restitution e of a linear spring-dashpot.
     Unlike ViscEl: no tangential dashpot, and the normal force is not clamped at zero.
     """
-    m, d = scene["material"], scene["material"]["diameter"]
-    kn = m["kappa"] * m["pressure"] * d
+    m, kn = scene["material"], der["kn"]
     e = m["restitution"]
     beta = -math.log(e) / math.sqrt(math.pi**2 + math.log(e) ** 2)
     if scene["effects"]["rolling_resistance"] > 0:
@@ -121,11 +119,11 @@ def loose_placement(rnd, diameters, W, y_lo, y_hi, periodic_y=False):
     return pos
 
 
-def add_disks(scene, positions, diameters, rho, d):
+def add_disks(scene, der, positions, diameters):
     """Add the disks (held in the plane, masses and inertias of disks) to O.bodies; return their ids."""
-    grains = []
+    grains, rho, d = [], der["rho"], der["d"]
     for (x, y), D in zip(positions, diameters):
-        b = utils.sphere(Vector3(x, y, 0), D / 2, material=contact_material(scene, D / 2))
+        b = utils.sphere(Vector3(x, y, 0), D / 2, material=contact_material(scene, der, D / 2))
         set_disk(b, D / 2, rho, d)
         b.state.blockedDOFs = "zXY"
         grains.append(O.bodies.append(b))
@@ -156,10 +154,10 @@ def new_cell(scene, der):
     O.periodic = True
     O.cell.setBox(W, y_top + 4 * d + 2 * H0, 4 * d * m["size_ratio_max"])
     pos = loose_placement(rnd, diam, W, y_bottom + d / 2, y_top - d / 2)
-    grains = add_disks(scene, pos, diam, rho, d)
+    grains = add_disks(scene, der, pos, diam)
     n_w = der["n_wall"]
     s = W / n_w
-    wall_mat = contact_material(scene, d / 2)
+    wall_mat = contact_material(scene, der, d / 2)
     bottom = []
     for i in range(n_w):
         b = utils.sphere(Vector3((i + 0.5) * s, y_bottom, 0), d / 2, material=wall_mat, fixed=True)
@@ -258,7 +256,7 @@ def new_periodic_cell(scene, der):
     wall cell's top-wall mass).
     """
     O.reset()
-    d, rho, W, H = der["d"], der["rho"], der["W"], der["H"]
+    d, W, H = der["d"], der["W"], der["H"]
     m, pk = scene["material"], scene["pack"]
     rnd, diam = seeded_diameters(scene, der)
     N = len(diam)
@@ -267,7 +265,7 @@ def new_periodic_cell(scene, der):
     O.cell.setBox(W, H0, 4 * d * m["size_ratio_max"])
     O.cell.homoDeform = 2  # Lees-Edwards: particle velocities follow changes of velGrad
     pos = loose_placement(rnd, diam, W, 0.0, H0, periodic_y=True)
-    grains = add_disks(scene, pos, diam, rho, d)
+    grains = add_disks(scene, der, pos, diam)
     assert grains == list(range(N)), "grains must have ids 0..N-1"
     lay = dict(kind="periodic", N=N, grains=[0, N], n_wall=0, d=d, W=W, H=H, area=sum(math.pi * D * D / 4 for D in diam),
                x_shift=0.0)

@@ -1,47 +1,110 @@
-"""Entry point: yade -n -x yade_scripts/run_stage.py <scene.json> <stage> <case_dir>
+"""Entry point: python3 yade_scripts/run_stage.py <scene.json> <stage> <case_dir> [--log <file>]
 
 Runs one stage (pack, preshear, heaviside, sinusoidal, or a reversal schedule named in the
 scene's `schedules` section) of one case; see docs/scene.md.
-Exit codes: 0 done, 1 unexpected error, 2 bad scene or missing input, 3 guard fired,
-4 interrupted by SIGTERM or SIGINT (checkpoint written: rerun to resume),
-5 another live process runs this stage of this case (nothing touched).
+
+YADE is imported as a library (yadelib): no TCP Python prompt, no XMLRPC server, no
+auth cookie in the log. Any `python3` may start the script: it runs itself again under
+the interpreter the `yade` launcher names (YADE's compiled modules are built for it).
+Under the launcher itself (`yade -x`, whose remote servers are then open) it refuses.
+
+The order is: the scene (no YADE), the stage lock (no YADE: a refusal is cheap and
+immediate), the log (`--log`: opened only once the lock is held, see stagelog), YADE.
+Exit codes: 0 done, 1 unexpected error, 2 bad scene, missing input or YADE not found,
+3 guard fired, 4 interrupted by SIGTERM or SIGINT (checkpoint written: rerun to resume),
+5 another live process runs this stage of this case (nothing touched, the log included).
 """
 import os
 import sys
 
-# under `yade -x`, __file__ is /usr/bin/yade: find this directory from argv[0]
 sys.path.insert(0, os.path.dirname(os.path.abspath(sys.argv[0])))
 
-import scene as scenemod  # noqa: E402
-import stagelock  # noqa: E402
+import yadelib  # noqa: E402
 
-USAGE = ("usage: yade -n -x yade_scripts/run_stage.py <scene.json> "
-         "<pack|preshear|heaviside|sinusoidal|<schedule name>> <case_dir>")
+USAGE = ("usage: python3 yade_scripts/run_stage.py <scene.json> "
+         "<pack|preshear|heaviside|sinusoidal|<schedule name>> <case_dir> [--log <file>]")
+
+
+def parse(argv):
+    """(scene path, stage, case_dir, log path or None), or None if the command line is wrong."""
+    argv, log = list(argv), None
+    if "--log" in argv:
+        k = argv.index("--log")
+        if k + 1 >= len(argv):
+            return None
+        log = argv[k + 1]
+        del argv[k:k + 2]
+    if len(argv) != 3:
+        return None
+    return (*argv, log)
 
 
 def main(argv):
-    if len(argv) != 3 or not (argv[1] in scenemod.STAGES or scenemod.PROTOCOL_NAME.match(argv[1])):
+    if yadelib.under_the_launcher():
+        print("run_stage.py is not run by the yade launcher (it opens a TCP Python prompt and an "
+              "XMLRPC server for the life of the stage): " + USAGE.removeprefix("usage: "), file=sys.stderr)
+        return 2
+    import scene as scenemod
+    import stagelock
+
+    args = parse(argv)
+    if args is None or not (args[1] in scenemod.STAGES or scenemod.PROTOCOL_NAME.match(args[1])):
         print(USAGE, file=sys.stderr)
         return 2
-    path, stage, case_dir = argv
+    path, stage, case_dir, log_path = args
     try:
         scene, sha = scenemod.load(path, stage)
     except scenemod.SceneError as e:
         print(e, file=sys.stderr)
         return 2
-    import stages  # YADE imports only once the scene is known to be good
 
-    stages.install_signal_handlers()
-    lock = stagelock.StageLock(case_dir, stage, log=lambda line: print(line, flush=True))
+    said = []  # the lock's lines (a stale lock taken over) go to the log, once it is open
+    lock = stagelock.StageLock(case_dir, stage, log=said.append)
     try:
         lock.acquire()
     except stagelock.Busy as e:
         print(f"busy: {e}", file=sys.stderr)
         return 5
+    import stagelog
+
+    log = stagelog.StageLog(log_path, case_dir, stage) if log_path else None
+    try:
+        if log is not None:
+            log.open()
+        for line in said:
+            print(line, flush=True)
+        return run(scene, sha, stage, case_dir, lock, log)
+    finally:
+        if log is not None:
+            log.close()
+        lock.release()
+
+
+class _Renew:
+    """Called by the run loop after every chunk: renew the lock, keep the log in place."""
+
+    def __init__(self, lock, log):
+        self.lock, self.log = lock, log
+
+    def touch(self):
+        self.lock.touch()
+        if self.log is not None:
+            self.log.keep()
+
+
+def run(scene, sha, stage, case_dir, lock, log):
+    try:
+        yadelib.import_yade()
+    except (yadelib.YadeNotFound, ImportError) as e:
+        print(f"YADE not found: {e}", file=sys.stderr)
+        return 2
+    import stages  # YADE imports only once the scene is known to be good and the stage is ours
+
+    stages.install_signal_handlers()
     try:
         st = stages.Stage(scene, sha, stage, case_dir)
         st.prepare()
-        st.run(lock)
+        st.run(_Renew(lock, log))
     except stages.InputError as e:
         print(f"input error: {e}", file=sys.stderr)
         return 2
@@ -51,13 +114,23 @@ def main(argv):
     except stages.Interrupted as e:
         print(f"interrupted: {e}", file=sys.stderr)
         return 4
-    finally:
-        lock.release()
     return 0
 
 
-rc = main(sys.argv[1:])
-sys.stdout.flush()
-sys.stderr.flush()
-if rc:
-    os._exit(rc)
+if __name__ == "__main__":  # also under the launcher (`yade -x` runs a script as __main__)
+    if not yadelib.under_the_launcher():
+        try:
+            yadelib.run_under_yade_interpreter()
+        except yadelib.YadeNotFound as e:
+            print(f"YADE not found: {e}", file=sys.stderr)
+            os._exit(2)
+    try:
+        rc = main(sys.argv[1:])
+    except Exception:  # exit code 1, with the traceback (in the log once it is open)
+        import traceback
+
+        traceback.print_exc()
+        rc = 1
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(rc)  # YADE's threads are not joined at exit: leave at once with the stage's code

@@ -10,6 +10,12 @@ drops it when the process dies, even on SIGKILL) on a file that names its owner
 (`touch`), so that a lock left by a process on another host, where the PID
 cannot be checked, is taken as stale only once it has not been renewed for
 `STALE_S` seconds. Pure Python: no YADE import.
+
+Liveness is the flock itself, not the PID in the file: the kernel holds the lock
+exactly as long as the owner's open file, so a successful flock on this host proves
+that no process holds it, and a PID check could only refuse wrongly (the PID reused
+by an unrelated process). The runner takes the lock before it imports YADE, so a
+refusal comes within a fraction of a second of the start, while the owner runs.
 """
 import errno
 import fcntl
@@ -45,16 +51,6 @@ def describe(rec):
     if "pid" not in rec:
         return f"an unknown process (lock file holds {rec.get('raw', '')[:80]!r})"
     return f"PID {rec['pid']} on host {rec.get('host', '?')} (started {rec.get('started', '?')})"
-
-
-def _pid_alive(pid):
-    try:
-        os.kill(int(pid), 0)
-    except ProcessLookupError:
-        return False
-    except (PermissionError, ValueError, TypeError, OverflowError):
-        return True  # exists (another user) or unreadable: assume alive
-    return True
 
 
 class StageLock:

@@ -9,10 +9,12 @@ wildcard_constraints:
 
 
 # One YADE stage: run_stage.py reads the scene, resumes from a checkpoint in
-# <case_dir>/.partial/ if there is one, and writes the stage's outputs.
+# <case_dir>/.partial/ if there is one, and writes the stage's outputs. It imports
+# YADE as a library (no `yade -x`: no remote servers) and opens its own log only
+# once it holds the stage lock, so a refused run (exit 5) leaves the log alone.
 YADE_STAGE = (
-    "OMP_NUM_THREADS=1 {YADE} -n -x yade_scripts/run_stage.py"
-    " {input.scene} {params.stage} {params.case_dir} > {log} 2>&1"
+    "OMP_NUM_THREADS=1 YADE_LAUNCHER={YADE} python3 yade_scripts/run_stage.py"
+    " {input.scene} {params.stage} {params.case_dir} --log {log}"
 )
 
 

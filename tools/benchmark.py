@@ -1,8 +1,8 @@
 """Performance of the DEM stages: throughput, cost of sampling, packing time.
 
-    python3 yade_scripts/benchmark.py [--out results/accuracy/dem_throughput.csv] [--sizes 500,5000]
+    python3 tools/benchmark.py [--out results/accuracy/dem_throughput.csv] [--sizes 500,5000]
 
-(standard library only; it runs `yade -n -x yade_scripts/run_stage.py` per stage,
+(standard library only; it runs `python3 yade_scripts/run_stage.py` per stage,
 on one thread.) For each size (number of disks, set through H with W = 4H):
 - pack: wall time of the packing (500 disks: the example's criteria; the
   5,000-disk cell uses loose criteria so the study stays within minutes);
@@ -23,7 +23,7 @@ import sys
 import tempfile
 import time
 
-HERE = os.path.dirname(os.path.abspath(__file__))
+HERE = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "yade_scripts")
 RUN = os.path.join(HERE, "run_stage.py")
 H_FOR_N = {500: 12, 5000: 37}  # N = 0.8 W (H - d) / (pi <D^2>/4) with W = 4H
 STRAIN_FOR_N = {500: 0.05, 5000: 0.01}
@@ -52,7 +52,7 @@ def run(scene, stage, case_dir):
         json.dump(scene, f)
     env = dict(os.environ, OMP_NUM_THREADS="1")
     t0 = time.time()
-    r = subprocess.run(["yade", "-n", "-x", RUN, path, stage, case_dir], capture_output=True, text=True, env=env)
+    r = subprocess.run(["python3", RUN, path, stage, case_dir], capture_output=True, text=True, env=env)
     wall = time.time() - t0
     if r.returncode != 0:
         sys.exit(f"{stage} failed ({r.returncode}):\n{r.stdout[-2000:]}\n{r.stderr[-2000:]}")

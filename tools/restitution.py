@@ -1,6 +1,6 @@
 """Measure the restitution the scene's time step really gives: two disks collide head on.
 
-yade -n -x yade_scripts/restitution.py <scene.json> [<out.json>]
+python3 tools/restitution.py <scene.json> [<out.json>]
 
 Prints (and writes) JSON: {"dt_over_tc": ..., "pairs": [{"D1": .., "D2": .., "e": ..}, ...]}
 with diameters in d. The disks are built exactly as in the cell (build.py).
@@ -9,7 +9,12 @@ import json
 import os
 import sys
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(sys.argv[0])))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(sys.argv[0]))), "yade_scripts"))
+
+import yadelib  # noqa: E402
+
+yadelib.run_under_yade_interpreter()  # YADE as a library: no remote servers (docs/scene.md)
+yadelib.import_yade()
 
 import scene as scenemod  # noqa: E402
 
@@ -30,8 +35,8 @@ def collide(D1, D2, v=0.1):
     O.reset()
     d, V0 = der["d"], der["V0"]
     r1, r2 = D1 * d / 2, D2 * d / 2
-    a = utils.sphere(Vector3(0, 0, 0), r1, material=build.contact_material(scene, r1))
-    b = utils.sphere(Vector3(r1 + r2 + 1e-3 * d, 0, 0), r2, material=build.contact_material(scene, r2))
+    a = utils.sphere(Vector3(0, 0, 0), r1, material=build.contact_material(scene, der, r1))
+    b = utils.sphere(Vector3(r1 + r2 + 1e-3 * d, 0, 0), r2, material=build.contact_material(scene, der, r2))
     for body, r in ((a, r1), (b, r2)):
         build.set_disk(body, r, der["rho"], d)
         body.state.blockedDOFs = "zXY"

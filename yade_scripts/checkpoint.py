@@ -1,0 +1,152 @@
+"""Checkpoint and resume: a stage's work files in `<case_dir>/.partial/<stage>/`.
+
+A checkpoint is the simulation (O.save, the controller's state in O.tags["ys_state"])
+plus the number of CSV rows it covers (resume.json); a rerun loads it, cuts the
+partial CSV back to those rows and goes on, so the series has no gap and no
+duplicated row. Two checkpoint files alternate, so a kill while saving leaves the
+previous one whole. A mixin of stages.Stage.
+
+A loaded state is not the live one bit for bit: YADE saves the contacts, but not
+its collider's sorted bounds, so after a load the collider finds new contacts in
+another order, the interaction container's order differs from the live run's
+within a step or two, and so does the order in which contact forces are summed
+on each disk (rounding: 1e-17 after a few steps, then chaos). So every run
+reloads its own state at a fixed grid of steps, every RELOAD_EVERY steps since
+the stage's start (`reload`: saved in memory, loaded back), and checkpoints are
+taken only at those points: a resumed run then starts from exactly the state the
+uninterrupted run continued from, and the two series are byte-identical. A
+signal (SIGTERM, SIGINT) rewinds to the last reload point and checkpoints there.
+"""
+import json
+import os
+import shutil
+import time
+
+import build
+import measure
+from yade.wrapper import Omega
+
+O = Omega()
+RELOAD_EVERY = 10000  # steps between reloads (about 120 steps' cost each: ~1 %), the checkpoint grid
+SLOT = "ys_reload"  # the in-memory save (O.saveTmp) of the last reload point
+
+
+def save_state(path):
+    """O.save into an existing folder, through a temporary name.
+
+    YADE 2023.02a's O.save into a missing folder does not fail but loops (for
+    a large scene): the folder is created and checked first.
+    """
+    folder = os.path.dirname(path)
+    os.makedirs(folder, exist_ok=True)
+    if not os.path.isdir(folder):
+        raise RuntimeError(f"cannot save {path}: {folder} is not a folder")
+    tmp = os.path.join(folder, f"tmp{os.getpid()}_" + os.path.basename(path))  # keeps the .yade.gz suffix
+    O.save(tmp)
+    if not os.path.isfile(tmp):
+        raise RuntimeError(f"O.save did not write {tmp}")
+    os.replace(tmp, path)
+
+
+def atomic_json(path, obj):
+    tmp = path + ".tmp"
+    with open(tmp, "w") as f:
+        json.dump(obj, f, indent=1, sort_keys=True)
+        f.flush()
+        os.fsync(f.fileno())
+    os.replace(tmp, path)
+
+
+
+class Checkpoints:
+    def prepare(self):
+        os.makedirs(self.case_dir, exist_ok=True)
+        resume = None
+        if os.path.exists(self.resume_path):
+            with open(self.resume_path) as f:
+                resume = json.load(f)
+            if resume.get("scene_sha256") != self.hash:
+                print(f"[{self.stage}] partial run from another scene: discarded", flush=True)
+                resume = None
+            elif not self._csv_has_rows(resume["rows"]):
+                print(f"[{self.stage}] partial CSV shorter than its checkpoint: discarded", flush=True)
+                resume = None
+        if resume is None:
+            shutil.rmtree(self.partial, ignore_errors=True)  # this process owns the stage (see stagelock)
+            os.makedirs(self.partial)
+            self.start_fresh()
+            self.st["resumed"] = 0
+            with open(self.csv_path, "w") as f:
+                f.write(",".join(self.columns()) + "\n")
+        else:
+            ck = os.path.join(self.partial, resume["checkpoint"])
+            O.load(ck)
+            self.st = json.loads(O.tags["ys_state"])
+            self.st["resumed"] += 1
+            self._truncate_csv(self.st["rows"])
+            print(f"[{self.stage}] resumed from {resume['checkpoint']} at iteration {O.iter}, "
+                  f"strain {self.st['strain']:.5f}, {self.st['rows']} rows kept", flush=True)
+        self.csv = open(self.csv_path, "a")
+        self.t_wall0 = time.time()
+        self.cpu0 = time.process_time()
+        self.iter_wall0 = O.iter
+        self.last_progress = self.t_wall0
+        self.last_checkpoint = self.t_wall0
+        self.reload()  # a fresh start too: a resume from this point sees the same state
+
+    def _csv_has_rows(self, rows):
+        if not os.path.isfile(self.csv_path):
+            return False
+        with open(self.csv_path) as f:
+            n = sum(1 for line in f if line.endswith("\n"))
+        return n >= rows + 1
+
+    def _truncate_csv(self, rows):
+        with open(self.csv_path) as f:
+            lines = f.readlines()
+        keep = lines[: rows + 1]
+        with open(self.csv_path, "w") as f:
+            f.writelines(keep)
+            f.flush()
+            os.fsync(f.fileno())
+
+    def checkpoint(self):
+        st = self.st
+        self.csv.flush()
+        os.fsync(self.csv.fileno())
+        now = time.time()
+        st["wall_time"] += now - self.t_wall0
+        st["cpu_time"] = st.get("cpu_time", 0.0) + time.process_time() - self.cpu0
+        self.cpu0 = time.process_time()
+        self.t_wall0, self.iter_wall0 = now, O.iter
+        name = "ckpt_a.yade.gz" if st.get("ckpt") != "ckpt_a.yade.gz" else "ckpt_b.yade.gz"
+        st["ckpt"] = name
+        O.tags["ys_state"] = json.dumps(st)
+        save_state(os.path.join(self.partial, name))
+        atomic_json(self.resume_path, dict(checkpoint=name, rows=st["rows"], iter=O.iter,
+                                            scene_sha256=self.hash))
+        self.last_checkpoint = now
+        print(f"[{self.stage}] checkpoint at iteration {O.iter} ({st['rows']} rows, "
+              f"written in {time.time() - now:.2f} s)", flush=True)
+
+    def reload(self):
+        """Save the state in memory, load it back, and set what a load does not restore (the
+        wall load, a permanent force; the engines, built anew as at a resume): the state a
+        resume from a checkpoint written here starts from. Between steps only."""
+        O.tags["ys_state"] = json.dumps(self.st)
+        O.saveTmp(SLOT)
+        O.loadTmp(SLOT)
+        self.lay = build.layout()
+        O.dt = self.st["dt"]
+        build.set_wall_load(self.lay, self.st["load"])
+        self.bulk = measure.bulk_for(self.lay, self.der["d"])
+        self._install_engines()
+
+    def next_reload(self):
+        """Steps since the stage's start of the next reload point."""
+        return ((O.iter - self.st["iter0"]) // RELOAD_EVERY + 1) * RELOAD_EVERY
+
+    def rewind(self):
+        """Back to the last reload point (its state and controller state), to checkpoint there."""
+        O.loadTmp(SLOT)
+        self.st = json.loads(O.tags["ys_state"])
