@@ -19,7 +19,7 @@ if not workflow.overwrite_configfiles:
 
 
 # Pre-flight: every bad input is named (key, value, allowed) before any job, exit code 2.
-from campaign import preflight
+import preflight
 
 preflight.stop_on_problems(preflight.check(config, workflow.configfiles))
 validate(config, "workflow/schemas/config.schema.yaml")  # fills the schema's defaults

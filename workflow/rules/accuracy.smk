@@ -300,7 +300,7 @@ def accuracy_targets():
 # cell; `snakemake -j2 bulk_study_dem ...` runs only the study's DEM cases,
 # `snakemake -j2 bulk_vs_walls ...` them and the analysis (results/accuracy/
 # bulk_vs_walls.csv, .png; dem_study/README.md "Bulk against walls").
-from campaign import preflight as _preflight
+import preflight as _preflight
 from dem_study import bulk_cells
 
 BULK_STUDY = bulk_cells.enabled(config)

@@ -9,7 +9,7 @@
 #   sensitivity_set: calibration set whose parameters are perturbed ("all")
 #   options: extra options of `compare predict` (e.g. "--zoom 0.05")
 
-from campaign.preflight import protocol_segments
+from campaign.scene_spec import protocol_segments
 from dem_contract.derived import reversal_kinds
 
 COMPARE = f"{RESULTS}/compare"
