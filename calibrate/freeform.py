@@ -25,7 +25,7 @@ normalised residual (route 2's objective) wins and is refitted on every seed.
 Model 1 and Model 2 are refitted by route 2 on the same folds (from their
 full-data fits, ``cv_evals`` evaluations), so every held-out run is predicted
 by the three laws calibrated without its seed: paired errors per run, averaged
-per seed, with a bootstrap interval over seeds (``claims.stats.mean_interval``).
+per seed, with a bootstrap interval over seeds (``shared_stats.mean_interval``).
 
 Scores per held-out run: RMS error of |A| over the first ``early_strain`` of
 path strain after the first reversal (the claims table's window), and of
@@ -52,11 +52,10 @@ import numpy as np
 import pandas as pd
 from scipy.optimize import least_squares
 
-from claims.measures import early_rmse
-from claims.stats import mean_interval
 from dem_contract import angle_difference, fabric_angle_deg, fabric_norm
 from model import params_from_dict
 from model.laws import AlphaSpline, spline_basis, spline_of_linear, spline_size
+from shared_stats import early_rmse, mean_interval
 
 from . import fits, route2
 
@@ -189,7 +188,7 @@ def run_errors(c, replay, early_strain: float) -> dict:
     """RMS errors of one run's model curve ``c`` (a, b, signed mu at the samples) against its DEM samples.
 
     ``early_A_norm``: |A| over the first ``early_strain`` after the run's first reversal, the claims'
-    measure (``claims.measures.early_rmse``); the others over the whole run.
+    measure (``shared_stats.early_rmse``); the others over the whole run.
     """
     model_A, dem_A = fabric_norm(c[:, 0], c[:, 1]), fabric_norm(replay.a, replay.b)
     dth = angle_difference(fabric_angle_deg(c[:, 0], c[:, 1]), fabric_angle_deg(replay.a, replay.b))
