@@ -5,7 +5,7 @@ Method
 Eq. 4 with alpha1, alpha2 any smooth functions of X (``model.laws.AlphaSpline``:
 cubic B-splines on ``n_breaks`` evenly spaced breaks over the X the samples
 visit, from their 0.5th to their 99.5th percentile, continued linearly outside) is fitted by trajectory fitting on the
-residuals of route 2 (``route2.curves``, ``route2._residual_vector`` and the
+residuals of route 2 (``route2.curves``, ``route2.residual_vector`` and the
 steady residuals of ``fits``), plus a roughness penalty
 
 .. math::
@@ -149,9 +149,7 @@ def fit_spline(replays, doc: dict, start: AlphaSpline, steady: dict, sigma_mu: f
             if isinstance(c, Exception):
                 out.append(None)
                 continue
-            s1, a2 = sp(float(steady["X"]))
-            r = np.concatenate([route2._residual_vector(c, replays, sigma_mu, s2),
-                                fits._steady_fabric_residuals(s1, a2, steady, s2.steady_weight),
+            r = np.concatenate([route2.fit_residuals(c, replays, sigma_mu, s2, sp(float(steady["X"])), steady),
                                 _penalty_rows(sp, lam)])
             out.append(r if np.all(np.isfinite(r)) else None)
         return out
@@ -162,7 +160,7 @@ def fit_spline(replays, doc: dict, start: AlphaSpline, steady: dict, sigma_mu: f
     try:
         sol = least_squares(res, x0, x_scale="jac", diff_step=s2.diff_step, max_nfev=max_evals, workers=workers)
         message = sol.message
-    except route2._Budget:
+    except route2.BudgetExhausted:
         message = f"budget of {max_evals} model evaluations used up; best point kept"
     best = state["best"] if state["best"] is not None else x0
     return unpack(best), {"cost": state["best_cost"], "evaluations": state["n"],
@@ -204,7 +202,7 @@ def _heldout(items, held, s2, sigma_mu, early_strain) -> list:
         if isinstance(c, Exception):
             out.append((math.inf, [{k: math.nan for k in SCORES} for _ in held]))
             continue
-        z = route2._residual_vector(c, held, sigma_mu, s2)
+        z = route2.residual_vector(c, held, sigma_mu, s2)
         out.append((float(np.mean(z**2)), [run_errors(m, r, early_strain) for m, r in zip(c, held)]))
     return out
 
