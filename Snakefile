@@ -32,6 +32,8 @@ include: "workflow/rules/calibrate.smk"
 include: "workflow/rules/compare.smk"
 include: "workflow/rules/claims.smk"
 include: "workflow/rules/accuracy.smk"
+include: "workflow/rules/dem_study.smk"
+include: "workflow/rules/bulk_study.smk"
 
 
 rule all:

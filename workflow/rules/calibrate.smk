@@ -6,6 +6,14 @@
 from campaign.calibration_sets import calibration_sets
 
 CALIBRATION_SETS = calibration_sets(config, CASES)  # name -> dict(cases, protocols)
+
+
+# The {calset} wildcard of every rule (calibration, comparison): one of the campaign's sets
+# (their names are checked by the pre-flight, preflight.checks.SET_NAME).
+wildcard_constraints:
+    calset="|".join(CALIBRATION_SETS),
+
+
 CALIBRATION_FIGURES = [
     "fig2a_stress_vs_Axy",
     "fig2b_mu_vs_X",
@@ -29,7 +37,7 @@ CALIBRATION_EXTRA = {
 }
 # calibration.freeform: the free-form alpha1(X), alpha2(X) fit (calibrate/freeform.py), its table
 # beside the others and its curves on Figs. 3a, 3b.
-CALIBRATION_FREEFORM = bool(config.get("calibration", {}).get("freeform", False))
+CALIBRATION_FREEFORM = config["calibration"]["freeform"]
 # calibrate writes heldout_scores.csv only when a bootstrap replicate held a seed
 # out (never with one seed): the rule then leaves its header alone in the file.
 HELDOUT_HEADER = "replicate,route,model,n_heldout_runs"

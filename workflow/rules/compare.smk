@@ -29,11 +29,7 @@ def protocol_kinds(protocols):
 COMPARE_KINDS = protocol_kinds(PROTOCOLS)
 COMPARE_TABLES = ["errors", "claims"]
 COMPARE_CATEGORY = "Models against the DEM"
-SENSITIVITY_SET = config.get("compare", {}).get("sensitivity_set", "all")
-
-
-wildcard_constraints:
-    calset="|".join(CALIBRATION_SETS) or "all",
+SENSITIVITY_SET = config["compare"]["sensitivity_set"]
 
 
 rule compare_predict:
