@@ -1,19 +1,19 @@
 """One table of the DEM campaign: a row per case, from the sidecars and the pre-shear.
 
-Called by the Snakemake rule `dem_summary`. The files are read through the
-contract's readers and the steady values are ``dem_contract.steady_values``
-(the last half of the pre-shear strain), the same numbers the calibration
-takes for each run.
+The Snakemake rule `dem_summary` runs ``python -m campaign.summary --dem DIR
+--cases LABEL=PRESSURE,I,SEED ... --stages STAGE ... --out FILE``. The files are
+read through the contract's readers and the steady values are
+``dem_contract.steady_values`` (the last half of the pre-shear strain), the same
+numbers the calibration takes for each run.
 """
+import argparse
 import sys
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[2]))   # the repository (Snakemake sets __file__)
-
-from dem_contract import read_series, read_sidecar, stage_costs, steady_values, steady_window  # noqa: E402
+from dem_contract import DEMInputError, read_series, read_sidecar, stage_costs, steady_values, steady_window
 
 #: The pre-shear columns the summary averages.
 SUMMARY_COLUMNS = ("t", "strain", "A_xx", "A_xy", "mu", "phi", "Z")
@@ -47,19 +47,43 @@ def case_row(label: str, case: dict, case_dir: Path, stages: list[str]) -> dict:
     return row
 
 
-def main(snakemake):
-    order = ["pack", "preshear", "heaviside", "sinusoidal"]   # then the reversal schedules, by name
-    stages = sorted({Path(p).stem for p in snakemake.input.sidecars},
-                    key=lambda s: (order.index(s) if s in order else len(order), s))
-    rows = [
-        case_row(label, case, Path(snakemake.input.series[i]).parent, stages)
-        for i, (label, case) in enumerate(snakemake.params.cases.items())
-    ]
-    table = pd.DataFrame(rows)
-    table.to_csv(snakemake.output[0], index=False, float_format="%.6g")
-    with open(snakemake.log[0], "w") as log:
-        print(table.to_string(), file=log)
+def summary_table(dem_dir: Path, cases: dict, stages) -> pd.DataFrame:
+    """A row per case (label -> dict(pressure, inertial_number, seed)) of ``dem_dir``/<label>/, in ``cases`` order.
+
+    The stages' columns come pack, preshear, heaviside, sinusoidal first, then the reversal schedules by name.
+    """
+    order = ["pack", "preshear", "heaviside", "sinusoidal"]
+    stages = sorted(set(stages), key=lambda s: (order.index(s) if s in order else len(order), s))
+    return pd.DataFrame([case_row(label, case, Path(dem_dir) / label, stages) for label, case in cases.items()])
 
 
-if "snakemake" in globals():
-    main(snakemake)  # noqa: F821 (injected by Snakemake's script directive)
+def parse_case(text: str) -> tuple[str, dict]:
+    """``LABEL=PRESSURE,I,SEED`` -> (label, dict(pressure, inertial_number, seed))."""
+    try:
+        label, values = text.split("=", 1)
+        pressure, inertial_number, seed = values.split(",")
+        return label, dict(pressure=float(pressure), inertial_number=float(inertial_number), seed=int(seed))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"--cases {text!r}: expected LABEL=PRESSURE,I,SEED, "
+                                         "e.g. p100000_I0.01_s1=100000.0,0.01,1") from None
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m campaign.summary", description=__doc__.splitlines()[0])
+    ap.add_argument("--dem", required=True, help="the campaign's DEM folder (one sub-folder per case)")
+    ap.add_argument("--cases", nargs="+", required=True, type=parse_case, metavar="LABEL=PRESSURE,I,SEED")
+    ap.add_argument("--stages", nargs="+", required=True, help="pack, preshear and the protocols")
+    ap.add_argument("--out", required=True, help="the table (CSV)")
+    args = ap.parse_args(argv)
+    try:
+        table = summary_table(Path(args.dem), dict(args.cases), args.stages)
+    except DEMInputError as exc:
+        print(exc, file=sys.stderr)
+        return 1
+    table.to_csv(args.out, index=False, float_format="%.6g")
+    print(table.to_string())
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -100,8 +100,9 @@ rule packing_cost:
     benchmark:
         f"{RESULTS}/benchmarks/accuracy/packing_cost.tsv"
     threads: 1
-    script:
-        "../scripts/packing_cost.py"
+    shell:
+        "{PY} -m dem_study.packing_cost --campaign {params.campaign:q} --sidecars {input.sidecars}"
+        " --out {output} > {log} 2>&1"
 
 
 def accuracy_targets():

@@ -130,7 +130,9 @@ rule dem_summary:
             category="DEM campaign",
         ),
     params:
-        cases=CASES,
+        cases=" ".join(f"{label}={c['pressure']!r},{c['inertial_number']!r},{c['seed']}"
+                       for label, c in CASES.items()),
+        stages=["pack", "preshear", *PROTOCOLS],
     resources:
         runtime=COST_SMALL.runtime,
         mem_mb=COST_SMALL.mem_mb,
@@ -138,5 +140,7 @@ rule dem_summary:
         f"{RESULTS}/logs/dem/summary.log",
     benchmark:
         f"{RESULTS}/benchmarks/dem/summary.tsv"
-    script:
-        "../scripts/summarize_campaign.py"
+    threads: 1
+    shell:
+        "{PY} -m campaign.summary --dem {RESULTS}/dem --cases {params.cases} --stages {params.stages}"
+        " --out {output} > {log} 2>&1"
