@@ -32,6 +32,7 @@ paper: setup
 	$(VENV)/bin/snakemake --report results/report.html
 
 test: setup
+	$(VENV)/bin/lint-imports --no-cache
 	$(PY) -m pytest -q
 
 # The CI preset through profiles/slurm on a one-node Slurm started here (root;

@@ -19,7 +19,7 @@ if not workflow.overwrite_configfiles:
 
 
 # Pre-flight: every bad input is named (key, value, allowed) before any job, exit code 2.
-from campaign import preflight
+import preflight
 
 preflight.stop_on_problems(preflight.check(config, workflow.configfiles))
 validate(config, "workflow/schemas/config.schema.yaml")  # fills the schema's defaults
@@ -33,6 +33,8 @@ include: "workflow/rules/compare.smk"
 include: "workflow/rules/claims.smk"
 include: "workflow/rules/pole_start.smk"
 include: "workflow/rules/accuracy.smk"
+include: "workflow/rules/dem_study.smk"
+include: "workflow/rules/bulk_study.smk"
 
 
 # One writer per results folder, from any working directory (campaign/results_lock.py): only a

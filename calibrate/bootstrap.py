@@ -162,7 +162,7 @@ def t_widened(iv: pd.DataFrame, values: pd.DataFrame, estimates: dict, n_seeds: 
     The percentile interval of a bootstrap over :math:`n` seeds is too narrow
     for small :math:`n` (with 3 seeds, resamples take 10 distinct values and
     the spread of the replicates is :math:`\sqrt{(n-1)/n}` times the standard
-    error). As the claims stage does for its means (``claims.stats.mean_interval``),
+    error). As the claims stage does for its means (``shared_stats.mean_interval``),
     the reported interval is the union of the percentile interval and
 
     .. math:: \hat\theta \pm t_{(1+\text{level})/2,\,n-1}\; s^*\sqrt{n/(n-1)},

@@ -75,7 +75,7 @@ STABILITY_WEIGHT = 1e3
 N_STEADY = 3
 
 
-def _steady_fabric_residuals(alpha1, alpha2, steady, weight):
+def steady_fabric_residuals(alpha1, alpha2, steady, weight):
     r"""Steady residuals: the implied steady (a, b) against the DEM's, and a stability hinge.
 
     With constant coefficients the steady state of Eq. 4 is linearly stable
@@ -210,7 +210,7 @@ def fit_model1(bins, steady, steady_weight=1.0, xc_margin=2e-3, x0=None) -> FitR
         al1, al2 = alpha_model1(X, a1, b1, c1, a2, b2, c2, Xc)
         r = _bin_residuals(np.asarray(al1), np.asarray(al2), b, W)
         s1, s2 = alpha_model1(steady["X"], a1, b1, c1, a2, b2, c2, Xc)
-        return np.concatenate([r, _steady_fabric_residuals(s1, s2, steady, steady_weight)])
+        return np.concatenate([r, steady_fabric_residuals(s1, s2, steady, steady_weight)])
 
     lo, hi = (b / scale for b in model1_bounds(xc_lo))
     # linear start from region A
@@ -247,7 +247,7 @@ def fit_model2(bins, steady, steady_weight=1.0) -> FitResult:
         al1, al2 = alpha_model2(X, *p)
         r = _bin_residuals(np.asarray(al1), np.asarray(al2), b, W)
         s1, s2 = alpha_model2(steady["X"], *p)
-        return np.concatenate([r, _steady_fabric_residuals(s1, s2, steady, steady_weight)])
+        return np.concatenate([r, steady_fabric_residuals(s1, s2, steady, steady_weight)])
 
     p1 = float(np.average(b["alpha1"], weights=1 / b["se_alpha1"] ** 2))
     p2 = np.polyfit(X, b["alpha2"], 1, w=1 / b["se_alpha2"])

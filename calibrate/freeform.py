@@ -7,7 +7,7 @@ cubic B-splines on breaks over the X the samples visit, from their 0.5th to
 their 99.5th percentile, continued linearly outside; how many breaks and how
 they crowd toward the largest X visited, where a pole would act, is chosen by
 cross-validation, ``breaks_for``) is fitted by trajectory fitting on the
-residuals of route 2 (``route2.curves``, ``route2._residual_vector`` and the
+residuals of route 2 (``route2.curves``, ``route2.residual_vector`` and the
 steady residuals of ``fits``), plus a roughness penalty
 
 .. math::
@@ -32,7 +32,7 @@ there.
 Model 1 and Model 2 are refitted by route 2 on the same folds (from their
 full-data fits, ``cv_evals`` evaluations), so every held-out run is predicted
 by the three laws calibrated without its seed: paired errors per run, averaged
-per seed, with a bootstrap interval over seeds (``claims.stats.mean_interval``).
+per seed, with a bootstrap interval over seeds (``shared_stats.mean_interval``).
 
 Scores per held-out run: RMS error of |A| over the first ``early_strain`` of
 path strain after the first reversal (the claims table's window), and of
@@ -59,11 +59,10 @@ import numpy as np
 import pandas as pd
 from scipy.optimize import least_squares
 
-from claims.measures import early_rmse
-from claims.stats import mean_interval
 from dem_contract import angle_difference, fabric_angle_deg, fabric_norm
 from model import params_from_dict
 from model.laws import AlphaSpline, spline_basis, spline_of_linear, spline_size
+from shared_stats import early_rmse, mean_interval
 
 from . import fits, route2
 
@@ -185,9 +184,7 @@ def fit_spline(replays, doc: dict, start: AlphaSpline, steady: dict, sigma_mu: f
             if isinstance(c, Exception):
                 out.append(None)
                 continue
-            s1, a2 = sp(float(steady["X"]))
-            r = np.concatenate([route2._residual_vector(c, replays, sigma_mu, s2),
-                                fits._steady_fabric_residuals(s1, a2, steady, s2.steady_weight),
+            r = np.concatenate([route2.fit_residuals(c, replays, sigma_mu, s2, sp(float(steady["X"])), steady),
                                 _penalty_rows(sp, lam)])
             out.append(r if np.all(np.isfinite(r)) else None)
         return out
@@ -198,7 +195,7 @@ def fit_spline(replays, doc: dict, start: AlphaSpline, steady: dict, sigma_mu: f
     try:
         sol = least_squares(res, x0, x_scale="jac", diff_step=s2.diff_step, max_nfev=max_evals, workers=workers)
         message = sol.message
-    except route2._Budget:
+    except route2.BudgetExhausted:
         message = f"budget of {max_evals} model evaluations used up; best point kept"
     best = state["best"] if state["best"] is not None else x0
     return unpack(best), {"cost": state["best_cost"], "evaluations": state["n"],
@@ -224,7 +221,7 @@ def run_errors(c, replay, early_strain: float) -> dict:
     """RMS errors of one run's model curve ``c`` (a, b, signed mu at the samples) against its DEM samples.
 
     ``early_A_norm``: |A| over the first ``early_strain`` after the run's first reversal, the claims'
-    measure (``claims.measures.early_rmse``); the others over the whole run.
+    measure (``shared_stats.early_rmse``); the others over the whole run.
     """
     model_A, dem_A = fabric_norm(c[:, 0], c[:, 1]), fabric_norm(replay.a, replay.b)
     dth = angle_difference(fabric_angle_deg(c[:, 0], c[:, 1]), fabric_angle_deg(replay.a, replay.b))
@@ -240,7 +237,7 @@ def _heldout(items, held, s2, sigma_mu, early_strain) -> list:
         if isinstance(c, Exception):
             out.append((math.inf, [{k: math.nan for k in SCORES} for _ in held]))
             continue
-        z = route2._residual_vector(c, held, sigma_mu, s2)
+        z = route2.residual_vector(c, held, sigma_mu, s2)
         out.append((float(np.mean(z**2)), [run_errors(m, r, early_strain) for m, r in zip(c, held)]))
     return out
 

@@ -82,7 +82,7 @@ def sensitivity(replays, base_doc: dict, model: str, fitted: dict, sigma_mu: flo
     vecs = []
     for item in items:
         c = next(it) if item is not None else ValueError("out of range")
-        vecs.append(None if isinstance(c, Exception) else route2._residual_vector(c, replays, sigma_mu, settings))
+        vecs.append(None if isinstance(c, Exception) else route2.residual_vector(c, replays, sigma_mu, settings))
     if vecs[0] is None:
         raise ValueError(f"identifiability: the {model} optimum cannot be integrated on the calibration runs")
     S = np.full((vecs[0].size, len(keys)), np.nan)

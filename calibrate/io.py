@@ -136,7 +136,7 @@ def check_steady(run: Run, window: float = STEADY_WINDOW, rel_tol: float = STEAD
     line in strain to A_xx, A_xy and mu. The drift it predicts across the
     window must be below ``max(rel_tol * level, se_factor * SE(drift))``, with
     ``level`` the window mean of |A| (fabric) or of mu, and SE(drift) corrected
-    for the serial correlation of the samples (``_ar1_variance_inflation``).
+    for the serial correlation of the samples (``ar1_variance_inflation``).
 
     Returns
     -------
@@ -173,7 +173,7 @@ def _drift_test(path, strain, series, window, rel_tol, se_factor, raise_on_drift
         slope, icpt = np.polyfit(x, y, 1)
         resid = y - (slope * x + icpt)
         sd = float(np.std(resid, ddof=2))
-        inflation = np.sqrt(_ar1_variance_inflation(resid))
+        inflation = np.sqrt(ar1_variance_inflation(resid))
         se_slope = inflation * sd / np.sqrt(np.sum(x**2))
         width = x.max() - x.min()
         drift = slope * width
@@ -226,7 +226,7 @@ def check_steady_ensemble(cases) -> list:
     return warnings
 
 
-def _ar1_variance_inflation(resid) -> float:
+def ar1_variance_inflation(resid) -> float:
     r"""Factor by which serial correlation inflates the variance of a mean or slope.
 
     DEM samples of one run are correlated over a few hundredths of strain (the

@@ -112,7 +112,7 @@ def curves(points, replays, settings: Route2Settings) -> list:
     """Per point ``(params, delta)``, the list (per replay) of route 2's model arrays, or the exception that failed it.
 
     Each run is integrated with its own pole, ``with_pole(params, X_rev, delta)``; every
-    (point, run) is one trajectory of a single batch (``route2._integrate_requests``).
+    (point, run) is one trajectory of a single batch (``route2.integrate_requests``).
     """
     if not points:
         return []
@@ -122,7 +122,7 @@ def curves(points, replays, settings: Route2Settings) -> list:
         items = [(with_pole(p, xr[i, j] if np.isfinite(xr[i, j]) else 0.0, d), "model1", "eq2")
                  for i, (p, d) in enumerate(points)]
         requests.append((items, [r], settings))
-    got = route2._integrate_requests(requests)
+    got = route2.integrate_requests(requests)
     out = []
     for i in range(len(points)):
         bad = next((j for j in range(len(replays)) if not np.isfinite(xr[i, j])), None)
@@ -148,9 +148,9 @@ def _objective(replays, base_doc, steady, sigma_mu, settings: Route2Settings, n_
         for (k, vals, _), c in zip(trials, got):
             if isinstance(c, Exception):
                 continue
-            r = route2._residual_vector(c, replays, sigma_mu, settings)
+            r = route2.residual_vector(c, replays, sigma_mu, settings)
             s1, s2 = fits.alpha_model1(steady["X"], *[vals[q] for q in fits.M1_KEYS[:-1]], 1.0)
-            r = np.concatenate([r, fits._steady_fabric_residuals(s1, s2, steady, settings.steady_weight)])
+            r = np.concatenate([r, fits.steady_fabric_residuals(s1, s2, steady, settings.steady_weight)])
             if np.all(np.isfinite(r)):
                 out[k] = r
         return out
@@ -178,14 +178,14 @@ def fit(replays, base_doc: dict, start: dict, steady: dict, sigma_mu: float,
         sol = least_squares(res, x0, bounds=(lo, hi), x_scale="jac", diff_step=settings.diff_step,
                             max_nfev=settings.max_evals, workers=workers)
         message = sol.message
-    except route2._Budget:
+    except route2.BudgetExhausted:
         message = f"budget of {settings.max_evals} model evaluations used up; best point kept"
     p = state["best"] if state["best"] is not None else x0
     vals = {**fixed, **dict(zip(keys, (p * scale).tolist()))}
     vals = {k: float(vals[k]) for k in KEYS}
     ok = state["best_cost"] < 0.5 * n_res * route2.PENALTY**2
     c = curves([(_block_params(base_doc, vals), vals["delta"])], replays, settings)[0] if ok else None
-    resid = (route2._residual_vector(c, replays, sigma_mu, settings)
+    resid = (route2.residual_vector(c, replays, sigma_mu, settings)
              if c is not None and not isinstance(c, Exception) else np.array([]))
     return fits.FitResult("model1_start", vals, float(state["best_cost"]), n_res - fits.N_STEADY,
                           float(np.sqrt(2 * state["best_cost"] / max(n_res, 1))), bool(ok), str(message),
@@ -222,7 +222,7 @@ def fit_multistart(replays, base_doc, steady, sigma_mu, settings: Route2Settings
         v = np.clip([c[k] for k in KEYS], lo, hi)
         clipped.append(dict(zip(KEYS, v.tolist())))
     got = curves([(_block_params(base_doc, c), c["delta"]) for c in clipped], replays, settings)
-    costs = [float(np.sum(route2._residual_vector(g, replays, sigma_mu, settings) ** 2))
+    costs = [float(np.sum(route2.residual_vector(g, replays, sigma_mu, settings) ** 2))
              if not isinstance(g, Exception) else np.inf for g in got]
     order = [i for i in np.argsort(costs) if np.isfinite(costs[i])][:n_fits] or [0]
     results = [fit(replays, base_doc, clipped[i], steady, sigma_mu, settings) for i in order]

@@ -27,7 +27,7 @@ The 95 % profile interval is the set of :math:`g` with
 the likelihood-ratio threshold with the residual variance estimated from the
 fit (the DEM's misfit is larger than its sample noise) and inflated for the
 serial correlation of the residuals (lag-1 autocorrelation :math:`\rho`,
-AR(1), ``io._ar1_variance_inflation``). Its ends are interpolated linearly
+AR(1), ``io.ar1_variance_inflation``). Its ends are interpolated linearly
 between grid points. An end that no grid point crosses is open: the interval
 reaches the edge of the grid (``-inf``/``inf``) or the parameter's bound (the
 bound's value; also for a grid that stops short of a finite bound, as Model 1's
@@ -108,7 +108,7 @@ def threshold(data_residuals, cost_min: float, n_free: int, level: float = 0.95)
     """
     r = np.asarray(data_residuals, float)
     s2 = 2.0 * cost_min / max(r.size - n_free, 1)
-    return 0.5 * float(stats.chi2.ppf(level, 1)) * s2 * io._ar1_variance_inflation(r)
+    return 0.5 * float(stats.chi2.ppf(level, 1)) * s2 * io.ar1_variance_inflation(r)
 
 
 def profile(replays, base_doc: dict, model: str, fitted: dict, steady: dict, sigma_mu: float,
@@ -142,7 +142,7 @@ def profile(replays, base_doc: dict, model: str, fitted: dict, steady: dict, sig
     s = replace(r2settings, max_evals=settings.evals)
     prm = params_from_dict({**base_doc, model: dict(fitted)})
     resid = route2.residuals(prm, replays, model, FRICTION[model], sigma_mu, r2settings)
-    steady_r = fits._steady_fabric_residuals(*(fits.alpha_model1 if model == "model1" else fits.alpha_model2)(
+    steady_r = fits.steady_fabric_residuals(*(fits.alpha_model1 if model == "model1" else fits.alpha_model2)(
         steady["X"], *[fitted[k] for k in (fits.M1_KEYS if model == "model1" else fits.M2_KEYS)]),
         steady, r2settings.steady_weight)
     cost0 = 0.5 * float(np.sum(resid**2) + np.sum(np.asarray(steady_r) ** 2))

@@ -244,10 +244,10 @@ def _curves_batched(items, replays, settings: Route2Settings) -> list:
         return []
     if getattr(_LOCKSTEP, "current", None) is not None:
         return _LOCKSTEP.current.submit((items, replays, settings))
-    return _integrate_requests([(items, replays, settings)])[0]
+    return integrate_requests([(items, replays, settings)])[0]
 
 
-def _integrate_requests(requests) -> list:
+def integrate_requests(requests) -> list:
     """``curves`` of several requests (items, replays, settings; same tolerances) in one ``simulate_batch`` call.
 
     A trajectory's numbers do not depend on the rest of its batch
@@ -359,7 +359,7 @@ class Lockstep:
             groups.setdefault((st.rtol, st.atol, st.method, st.max_steps), []).append(s)
         for group in groups.values():
             try:
-                outs = _integrate_requests([s["request"] for s in group])
+                outs = integrate_requests([s["request"] for s in group])
             except Exception as exc:   # a bad request: every job waiting on this batch gets the error
                 outs = [exc] * len(group)
             for s, o in zip(group, outs):
@@ -370,7 +370,8 @@ class Lockstep:
 _LOCKSTEP = threading.local()   # .current: the Lockstep the thread's job runs under, if any
 
 
-def _residual_vector(ms, replays, sigma_mu, settings: Route2Settings):
+def residual_vector(ms, replays, sigma_mu, settings: Route2Settings):
+    """Route 2's normalised data residuals of the model curves ``ms``, replay after replay (module Notes)."""
     parts = []
     for m, r in zip(ms, replays):
         parts += [(m[:, 0] - r.a) / r.sd_a, (m[:, 1] - r.b) / r.sd_b,
@@ -383,11 +384,22 @@ def residuals(params, replays, model, friction, sigma_mu, settings: Route2Settin
     (c,) = curves([(params, model, friction)], replays, settings)
     if isinstance(c, Exception):
         raise c
-    return _residual_vector(c, replays, sigma_mu, settings)
+    return residual_vector(c, replays, sigma_mu, settings)
 
 
-class _Budget(Exception):
-    pass
+def fit_residuals(ms, replays, sigma_mu, settings: Route2Settings, alphas, steady):
+    """The residuals route 2 minimises: the data residuals (``residual_vector``), then the steady fabric's rows.
+
+    ``alphas`` = (alpha1, alpha2) the fitted law gives at the steady X (``steady["X"]``): Model 1's or
+    Model 2's law (``fits.alpha_model1``/``alpha_model2``) in ``fit``, a free-form spline in
+    ``calibrate.freeform``; the rows are ``fits.steady_fabric_residuals`` (weight ``settings.steady_weight``).
+    """
+    return np.concatenate([residual_vector(ms, replays, sigma_mu, settings),
+                           fits.steady_fabric_residuals(*alphas, steady, settings.steady_weight)])
+
+
+class BudgetExhausted(Exception):
+    """``counted_objective``'s residual function was called past its budget of model evaluations."""
 
 
 def _with_block(base: dict, block: str, values: dict):
@@ -411,7 +423,7 @@ def counted_objective(evaluate, n_res: int, max_evals: int, batched: bool = True
 
     ``evaluate(points)`` returns the residual vector of each (scaled) point, or None
     where it cannot be integrated; such a point gets ``PENALTY`` in every one of its
-    ``n_res`` residuals. Past ``max_evals`` evaluations ``res`` raises ``_Budget``.
+    ``n_res`` residuals. Past ``max_evals`` evaluations ``res`` raises ``BudgetExhausted``.
     With ``batched``, ``workers(fun, xs)`` (the map ``least_squares`` evaluates the
     Jacobian's finite-difference points with) evaluates all points in one call first,
     then calls ``fun`` on each in scipy's order, so the counting, the budget and the
@@ -428,7 +440,7 @@ def counted_objective(evaluate, n_res: int, max_evals: int, batched: bool = True
 
     def res(p):
         if state["n"] >= max_evals:
-            raise _Budget
+            raise BudgetExhausted
         state["n"] += 1
         key = np.asarray(p, dtype=float).tobytes()
         r = ready.pop(key) if key in ready else evaluate([p])[0]
@@ -477,9 +489,8 @@ def _objective(replays, base_params, model, keys, scale, steady, sigma_mu, setti
             try:
                 if isinstance(c, Exception):
                     raise c
-                r = _residual_vector(c, replays, sigma_mu, settings)
-                s1, s2 = alpha(steady["X"], *[vals[key] for key in order])
-                r = np.concatenate([r, fits._steady_fabric_residuals(s1, s2, steady, settings.steady_weight)])
+                r = fit_residuals(c, replays, sigma_mu, settings, alpha(steady["X"], *[vals[key] for key in order]),
+                                  steady)
                 if not np.all(np.isfinite(r)):
                     raise ValueError("non-finite residuals")
                 out[k] = r
@@ -527,7 +538,7 @@ def fit(replays, base_params: dict, model: str, start: dict, steady: dict, sigma
         sol = least_squares(res, x0, bounds=(lo, hi), x_scale="jac", diff_step=settings.diff_step,
                             max_nfev=settings.max_evals, workers=workers)
         message = sol.message
-    except _Budget:
+    except BudgetExhausted:
         message = f"budget of {settings.max_evals} model evaluations used up; best point kept"
     p = state["best"] if state["best"] is not None else x0
     vals = {**fixed, **dict(zip(keys, (p * scale).tolist()))}
@@ -561,7 +572,7 @@ def _score_of(c, replays, settings: Route2Settings, sigma_mu: float) -> dict:
     try:
         if isinstance(c, Exception):
             raise c
-        z = _residual_vector(c, replays, sigma_mu, settings)
+        z = residual_vector(c, replays, sigma_mu, settings)
         dA, dth, dmu = [], [], []
         for m, r in zip(c, replays):
             dth.append(angle_difference(fabric_angle_deg(m[:, 0], m[:, 1]), fabric_angle_deg(r.a, r.b)))

@@ -1,8 +1,9 @@
 """The campaign: from the validated config to the DEM cases and their scene files.
 
-Used by the Snakemake workflow (Snakefile, workflow/rules/) and by dem_study:
+Used by the Snakemake workflow (Snakefile, workflow/rules/), by dem_study and by the pre-flight check (preflight/):
 
 - ``cases``: the table of DEM cases (pressure, inertial number, seed) and their labels;
 - ``scenes``: the scene file of one case (the input of yade_scripts, docs/scene.md);
-- ``preflight``: the checks the workflow runs on the config before any job.
+- ``scene_spec``: what the DEM scene accepts (defaults, ranges, protocol segments), read from yade_scripts/scene.py;
+- ``summary``: the campaign's table, a row per case from its sidecars and pre-shear (``python -m campaign.summary``).
 """

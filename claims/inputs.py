@@ -35,7 +35,7 @@ SERIES_COLUMNS = ("t", "strain", "gammadot", "A_xx", "A_xy", "sigma_xy", "p", "m
 RATE_DEAD_BAND = 0.1   # samples with |gammadot| below this fraction of the run's median have no direction
 
 
-def _read_csv(path, columns, what):
+def read_csv(path, columns, what):
     """A table of an earlier stage; a cut or ragged one is refused by file and line (``read_table``)."""
     return read_table(path, columns, what)
 
@@ -64,8 +64,8 @@ def read_comparison(compare_dir, sets=None) -> pd.DataFrame:
     compare_dir = Path(compare_dir)
     frames = []
     for name in sets or comparison_sets(compare_dir):
-        pred = _read_csv(compare_dir / name / "predictions.csv", PREDICTION_COLUMNS, "the comparison's curves")
-        err = _read_csv(compare_dir / name / "errors.csv", ERROR_COLUMNS, "the comparison's errors")
+        pred = read_csv(compare_dir / name / "predictions.csv", PREDICTION_COLUMNS, "the comparison's curves")
+        err = read_csv(compare_dir / name / "errors.csv", ERROR_COLUMNS, "the comparison's errors")
         flags = (err[err["level"] == "seed"].drop_duplicates(["case", "protocol"])
                  .set_index(["case", "protocol"])["in_sample"].astype(bool))
         key = pd.MultiIndex.from_frame(pred[["case", "protocol"]])
@@ -168,4 +168,4 @@ FREEFORM_COLUMNS = ("section", "key", "value", "low", "high", "n", "detail")
 
 def read_freeform(path) -> pd.DataFrame:
     """A calibration set's ``freeform.csv`` (``calibrate.freeform.table``); DEMInputError naming the file if bad."""
-    return _read_csv(Path(path), FREEFORM_COLUMNS, "free-form table of python -m calibrate --freeform")
+    return read_csv(Path(path), FREEFORM_COLUMNS, "free-form table of python -m calibrate --freeform")

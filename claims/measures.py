@@ -21,6 +21,7 @@ from scipy.stats import binned_statistic
 
 from dem_contract import fabric_angle_deg, fabric_norm
 from dem_contract.passage import SMOOTH, TAIL, Z_CLEAR, passage, smooth, tail_noise  # noqa: F401  (one home)
+from shared_stats.errors import early_rmse  # noqa: F401 (re-exported)
 
 N_BINS = 20         # bins of the single-valued curves of the collapse
 
@@ -73,24 +74,6 @@ def transition_width(s, A_xx, A_xy, low: float = 0.1, high: float = 0.9, end_fra
     if not (i_lo.size and i_hi.size):
         return math.nan
     return float(s[i_hi[0]] - s[i_lo[0]])
-
-
-def early_rmse(s, dem, model, window: float, start: float = 0.0) -> float:
-    r"""RMSE of a model curve against the DEM over the first ``window`` strain after the reversal.
-
-    .. math:: \mathrm{RMSE} = \Big(\frac1{n}\sum_{s_0 < s_i \le s_0 + w} (m_i - d_i)^2\Big)^{1/2}
-
-    over the ``n`` samples after the reversal at :math:`s_0` = ``start`` (the
-    claims' ``s_rev`` starts at the reversal, 0; the free-form scores pass the
-    path strain of the run's first reversal). The model is taken at the DEM's
-    samples (interpolated onto them by the caller); the DEM raw, not smoothed.
-    NaN with fewer than 2 samples in the window.
-    """
-    s = np.asarray(s, float)
-    m = (s > start) & (s <= start + window)
-    if m.sum() < 2:
-        return math.nan
-    return float(np.sqrt(np.mean((np.asarray(model, float)[m] - np.asarray(dem, float)[m]) ** 2)))
 
 
 def binned_scatter(x, y, n_bins: int = N_BINS) -> float:

@@ -51,9 +51,9 @@ def read_variant(compare_dir, sets=None) -> pd.DataFrame:
     base = inputs.read_comparison(compare_dir, sets)
     frames = [base]
     for name in sets:
-        pred = inputs._read_csv(compare_dir / name / "pole_start_predictions.csv", inputs.PREDICTION_COLUMNS,
+        pred = inputs.read_csv(compare_dir / name / "pole_start_predictions.csv", inputs.PREDICTION_COLUMNS,
                                 "the pole-at-start variant's curves")
-        err = inputs._read_csv(compare_dir / name / "pole_start_errors.csv", inputs.ERROR_COLUMNS,
+        err = inputs.read_csv(compare_dir / name / "pole_start_errors.csv", inputs.ERROR_COLUMNS,
                                "the pole-at-start variant's errors")
         flags = (err[err["level"] == "seed"].drop_duplicates(["case", "protocol"])
                  .set_index(["case", "protocol"])["in_sample"].astype(bool))

@@ -212,7 +212,7 @@ def power_table(runs: dict, case_dirs, table_rows: pd.DataFrame, protocols=REVER
     rows = []
     for claim_id, column, label, window in COMPARED:
         diffs, _, pairs, _ = table.early_error_differences(runs, column, window)
-        _, v = table._per_seed(diffs)
+        _, v = table.per_seed(diffs)
         sd = float(np.std(v, ddof=1)) if v.size >= 2 else math.nan
         k0 = transients_per_seed(pairs)
         effects = {"measured": float(estimates.get(claim_id, math.nan)),

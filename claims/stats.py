@@ -35,8 +35,8 @@ import math
 import numpy as np
 from scipy import stats
 
-N_RESAMPLES = 2000
-CONFIDENCE = 0.95
+from shared_stats.intervals import CONFIDENCE, N_RESAMPLES, mean_interval  # noqa: F401 (shared with calibrate)
+
 EQUIVALENCE_CONFIDENCE = 0.90   # two one-sided tests at 5 % each
 VERDICTS = ("reproduced", "contradicted", "negligible", "inconclusive")
 
@@ -44,47 +44,6 @@ VERDICTS = ("reproduced", "contradicted", "negligible", "inconclusive")
 def bootstrap_test_name(n_resamples: int = N_RESAMPLES) -> str:
     return (f"bootstrap over seeds, {n_resamples} resamples, percentile 95 % interval "
             f"(widened to the Student t interval where wider)")
-
-
-def mean_interval(values, n_resamples: int = N_RESAMPLES, seed: int = 0):
-    r"""Mean of per-seed values and its 95 % interval over seeds (bootstrap, at least the t interval).
-
-    .. math:: \hat\mu = \frac1n \sum_i d_i, \qquad
-              [\min(\hat\mu^*_{(2.5\%)},\ \hat\mu - t s/\sqrt n),\
-               \max(\hat\mu^*_{(97.5\%)},\ \hat\mu + t s/\sqrt n)]
-
-    with :math:`\hat\mu^*` the means of ``n_resamples`` resamples (with
-    replacement) of the :math:`n` seeds, :math:`s` their standard deviation
-    and :math:`t = t_{0.975,\,n-1}`.
-
-    Parameters
-    ----------
-    values : array_like
-        One value per seed (NaN values are dropped).
-    n_resamples : int
-    seed : int
-        Seeds the resampling (the table is reproducible).
-
-    Returns
-    -------
-    (float, float, float, int)
-        Estimate, low, high, n. The interval is NaN with fewer than 2 values.
-    """
-    d = np.asarray(values, float)
-    d = d[np.isfinite(d)]
-    n = int(d.size)
-    if n == 0:
-        return math.nan, math.nan, math.nan, 0
-    est = float(d.mean())
-    if n < 2:
-        return est, math.nan, math.nan, n
-    if np.all(d == d[0]):   # every resample has the same mean: a zero-width interval
-        return est, est, est, n
-    res = stats.bootstrap((d,), np.mean, n_resamples=n_resamples, confidence_level=CONFIDENCE,
-                          method="percentile", vectorized=True, rng=np.random.default_rng(seed))
-    ci = res.confidence_interval
-    t = stats.ttest_1samp(d, 0.0).confidence_interval(confidence_level=CONFIDENCE)
-    return est, float(min(ci.low, t.low)), float(max(ci.high, t.high)), n
 
 
 def equivalence_interval(values, n_resamples: int = N_RESAMPLES, seed: int = 0):

@@ -28,7 +28,7 @@ sets that did not see the run. Every reversal of every protocol is a run; a
 seed's reversals of one kind (Heaviside step, half cosine: the ``kind`` of
 ``predictions.csv``; for the model comparisons, scored by one set) are averaged
 first, so a schedule's several reversals weigh as one run of their kind
-(``_per_seed``). Model comparisons use only out-of-sample
+(``per_seed``). Model comparisons use only out-of-sample
 predictions: a run is scored with a set calibrated on another protocol (e.g.
 ``heaviside_only`` scored on the sinusoidal run) or another inertial number
 (``I<a>`` scored on the runs at ``I<b>``), and the two models are paired on
@@ -70,7 +70,7 @@ def _spread(boot, values) -> dict:
     return dict(eq=boot.equivalence(v), sd=float(np.std(v, ddof=1)) if v.size >= 2 else math.nan)
 
 
-def _per_seed(values: dict) -> tuple:
+def per_seed(values: dict) -> tuple:
     r"""Per-seed means: (case -> list of values, or case -> {group -> list}) -> (cases, means).
 
     With groups (``_add``: a reversal kind, or a calibration set and a kind), a seed's
@@ -98,7 +98,7 @@ def _per_seed(values: dict) -> tuple:
 
 
 def _add(values: dict, case: str, group, value) -> None:
-    """Append ``value`` to ``case``'s ``group`` (``_per_seed`` averages within a group first)."""
+    """Append ``value`` to ``case``'s ``group`` (``per_seed`` averages within a group first)."""
     values.setdefault(case, {}).setdefault(group, []).append(value)
 
 
@@ -129,10 +129,10 @@ def fall_rows(dem: dict, steady: dict, boot) -> list:
             _add(excess, case, _kind(d), f["excess"])
             _add(depth, case, _kind(d), f["depth"])
             _add(s_min, case, _kind(d), f["s_min"])
-        _, e = _per_seed(excess)
+        _, e = per_seed(excess)
         est, lo, hi, n = boot(e)
-        _, dd = _per_seed(depth)
-        _, sm = _per_seed(s_min)
+        _, dd = per_seed(depth)
+        _, sm = per_seed(s_min)
         sm_est, sm_lo, sm_hi, _ = boot(sm)
         rows.append(_row(
             qid, f"after a reversal {label} falls abruptly", "the paper, Sec. 4 and 5 (Figs. 4, 5)",
@@ -270,7 +270,7 @@ def early_error_differences(runs, column, window):
     Returns
     -------
     (dict, dict, list, int)
-        case -> (set, kind) -> differences of its runs (``_per_seed`` makes the per-seed means: a
+        case -> (set, kind) -> differences of its runs (``per_seed`` makes the per-seed means: a
         seed's reversals of one kind scored by one set averaged first), model -> RMSE of every
         run, the out-of-sample (key, curves) pairs and how many runs lacked a model (``_oos``).
     """
@@ -288,7 +288,7 @@ def early_error_differences(runs, column, window):
 def early_error_row(runs, claim_id, claim, source, column, label, window, boot) -> dict:
     """Claims 4 and 7: RMSE over the first ``window`` strain, Model 1 minus Model 2, paired per run."""
     diffs, r, pairs, missing = early_error_differences(runs, column, window)
-    _, v = _per_seed(diffs)
+    _, v = per_seed(diffs)
     est, lo, hi, n = boot(v)
     margin = margins.fall_margin(pairs, column)
     return _row(
@@ -321,7 +321,7 @@ def turning_row(runs, boot) -> dict:
             opp[m] = float(ax in ("90", "0/180") and ax != ref)
             count[m] += int(opp[m])
         _add(diffs, key[1], (key[0], _kind(d)), opp["model2"] - opp["model1"])
-    _, v = _per_seed(diffs)
+    _, v = per_seed(diffs)
     est, lo, hi, n = boot(v)
     return _row(
         "5", "Model 2's theta_A turns the opposite way in some cases, Model 1's does not", "the paper, Sec. 4",
@@ -346,7 +346,7 @@ def width_row(runs, boot) -> dict:
         for m in MODELS:
             w[m].append(wm[m])
         _add(diffs, key[1], (key[0], "sinusoidal"), abs(wm["model1"] - wd) - abs(wm["model2"] - wd))
-    _, v = _per_seed(diffs)
+    _, v = per_seed(diffs)
     est, lo, hi, n = boot(v)
     mean = {k: np.nanmean(x) if np.isfinite(x).any() else math.nan for k, x in ((k, np.asarray(x, float))
                                                                                for k, x in w.items())}

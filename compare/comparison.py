@@ -177,7 +177,7 @@ def run(case_dirs, params_path, protocols, set_name="all", train_cases=None, tra
         for i, r in enumerate(revs):
             base = dict(set=set_name, level="seed", case=r.label, group=r.group, protocol=key,
                         in_sample=r.label in train_cases and protocol in train_protocols)
-            curves, errors, claims = _seed_rows(r, {m: preds[m][i] for m in MODELS}, base, steady_here, dem_smooth)
+            curves, errors, claims = seed_rows(r, {m: preds[m][i] for m in MODELS}, base, steady_here, dem_smooth)
             pred_rows += [c.assign(**tags) for c in curves]
             err_rows += [dict(e, **tags) for e in errors]
             claim_rows += [dict(c, **tags) for c in claims]
@@ -192,14 +192,14 @@ def run(case_dirs, params_path, protocols, set_name="all", train_cases=None, tra
             ensembles[(group, key)] = ens
             err_rows += [dict(e, **tags) for e in errors]
             claim_rows += [dict(c, **tags) for c in claims]
-    return Comparison(predictions=pd.concat(pred_rows, ignore_index=True), errors=_tags_last(pd.DataFrame(err_rows)),
-                      claims=_tags_last(pd.DataFrame(claim_rows)), ensembles=ensembles)
+    return Comparison(predictions=pd.concat(pred_rows, ignore_index=True), errors=tags_last(pd.DataFrame(err_rows)),
+                      claims=tags_last(pd.DataFrame(claim_rows)), ensembles=ensembles)
 
 
 TAG_COLUMNS = ("kind", "reversal", "direction")
 
 
-def _tags_last(df: pd.DataFrame) -> pd.DataFrame:
+def tags_last(df: pd.DataFrame) -> pd.DataFrame:
     """The reversal's ``kind``, ``reversal`` and ``direction`` as the table's last columns."""
     return df[[c for c in df.columns if c not in TAG_COLUMNS] + [c for c in TAG_COLUMNS if c in df.columns]]
 
@@ -259,7 +259,7 @@ def _curve_arrays(table):
     return tuple(table[c].to_numpy() for c in ("s_rev", "A_xx", "A_xy", "mu"))
 
 
-def _seed_rows(r, preds, base, steady, dem_smooth):
+def seed_rows(r, preds, base, steady, dem_smooth):
     """Curves, error rows and claim rows of one DEM run and its predictions (``preds``: model -> Prediction).
 
     ``steady``: model -> (|A|, mu) of the model's own steady state, the reference of its claims.

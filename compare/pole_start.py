@@ -36,7 +36,7 @@ import pandas as pd
 from model import simulate
 from model.pole_start import far_pole, forward_history, load, mirrored_x, with_pole
 
-from .comparison import CURVE_COLUMNS, _seed_rows, _tags_last, model_steady, transient_groups
+from .comparison import CURVE_COLUMNS, seed_rows, tags_last, model_steady, transient_groups
 from .dem import canonical
 from .predict import Prediction, imposed_history, predict
 
@@ -102,13 +102,13 @@ def run(case_dirs, fit_path, protocols, set_name="all", train_cases=None, train_
         for r, p in zip(revs, preds):
             base = dict(set=set_name, level="seed", case=r.label, group=r.group, protocol=key,
                         in_sample=r.label in train_cases and protocol in train_protocols)
-            curves, errors, _ = _seed_rows(r, {MODEL: p}, base, {MODEL: steady[sign]}, 1)
+            curves, errors, _ = seed_rows(r, {MODEL: p}, base, {MODEL: steady[sign]}, 1)
             pred_rows += [c.assign(**tags) for c in curves if c["source"].iloc[0] == MODEL]
             err_rows += [dict(e, **tags) for e in errors]
     preds = (pd.concat(pred_rows, ignore_index=True) if pred_rows   # every run failed: the header alone
              else pd.DataFrame(columns=["set", "case", "group", "seed", "protocol", "source", *CURVE_COLUMNS,
                                         "kind", "reversal", "direction"]))
-    return preds, _tags_last(pd.DataFrame(err_rows))
+    return preds, tags_last(pd.DataFrame(err_rows))
 
 
 def main(argv=None) -> int:

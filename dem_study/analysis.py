@@ -243,7 +243,7 @@ def repeat_table(points: pd.DataFrame, results: dict[str, PointResult]) -> pd.Da
         for q in QUANTITIES:
             x = np.array([r.steady[q] for r in runs])
             y = np.array([r.steady[q] for r in base])
-            (mean_x, se_x), (mean_y, se_y) = (_mean_and_se(v, axial=q == "theta_A_deg") for v in (x, y))
+            (mean_x, se_x), (mean_y, se_y) = (mean_and_se(v, axial=q == "theta_A_deg") for v in (x, y))
             diff = angle_difference(mean_x, mean_y) if q == "theta_A_deg" else mean_x - mean_y
             with np.errstate(divide="ignore", invalid="ignore"):   # identical seeds: z is +-inf or NaN
                 z = float(np.divide(diff, np.hypot(se_x, se_y)))
@@ -253,7 +253,7 @@ def repeat_table(points: pd.DataFrame, results: dict[str, PointResult]) -> pd.Da
     return pd.DataFrame(rows, columns=cols)
 
 
-def _mean_and_se(x, axial: bool):
+def mean_and_se(x, axial: bool):
     r"""Mean over seeds and its standard error :math:`s/\sqrt n` (NaN for one seed).
 
     Axial angles (``axial``) are averaged on the circle (``dem_contract.axial_mean``),

@@ -25,7 +25,7 @@ treats all transients of a cell as independent, and ``design_effect_<q>`` =
 Notes
 -----
 Standard error of a seed mean, n seeds: :math:`SE = s/\sqrt n` (theta_A on the
-circle of axial angles, ``analysis._mean_and_se``). A steady quantity matches a
+circle of axial angles, ``analysis.mean_and_se``). A steady quantity matches a
 reference when
 
 .. math:: |x_c - x_r| \le k \sqrt{SE_c^2 + SE_r^2}
@@ -57,7 +57,7 @@ import pandas as pd
 
 from dem_contract import DEMInputError, angle_difference, read_series, read_sidecar, split_transients, steady_values
 
-from .analysis import StudyInputError, _mean_and_se, transient_curves
+from .analysis import StudyInputError, mean_and_se, transient_curves
 from .bulk_cost import STAGES, case_cost, reversal_stages
 
 STEADY = ("mu", "A_norm", "theta_A_deg", "phi", "Z")
@@ -107,7 +107,7 @@ def mean_curves(curves: list) -> pd.DataFrame:
     out = {"strain_since_reversal": curves[0]["strain_since_reversal"].to_numpy()}
     for q in TRANSIENT:
         stack = np.stack([c[q].to_numpy() for c in curves])
-        ms = [_mean_and_se(stack[:, j], q in AXIAL) for j in range(stack.shape[1])]
+        ms = [mean_and_se(stack[:, j], q in AXIAL) for j in range(stack.shape[1])]
         out[q] = np.array([m for m, _ in ms])
         out[f"{q}_se"] = np.array([s for _, s in ms])
     return pd.DataFrame(out)
@@ -133,7 +133,7 @@ def cell_table(cases: pd.DataFrame, results: dict[str, CaseResult], early_strain
                                                - row["core_hours_preshear_per_seed"])
         row["transients"] = sum(len(r.transients) for r in res)
         for q in STEADY:
-            row[q], row[f"{q}_se"] = _mean_and_se(np.array([r.steady[q] for r in res]), q in AXIAL)
+            row[q], row[f"{q}_se"] = mean_and_se(np.array([r.steady[q] for r in res]), q in AXIAL)
         curves[cell] = c = mean_curves([r.curves for r in res])
         pooled = mean_curves([t for r in res for t in r.transients])   # every transient as if independent
         early = c["strain_since_reversal"] < early_strain

@@ -151,9 +151,9 @@ def problems(config: dict) -> list[str]:
 
 def scene_problems(config: dict) -> list[str]:
     """Each cell's scene (first seed) through the DEM's own validator (yade_scripts/scene.py), naming the cell."""
-    from campaign.preflight import _scene_module
+    from campaign.scene_spec import scene_module
 
-    module = _scene_module()
+    module = scene_module()
     s = settings(config)
     out = []
     for cell in s["cells"]:

@@ -20,13 +20,13 @@ from dem_contract.tables import read_table
 
 from . import bulk, bulk_cells, bulk_cost, bulk_figures, grid
 from .analysis import StudyInputError, strain_edges
-from .cli import _read_yaml
+from .cli import read_yaml
 
 
 def estimate(args) -> int:
-    config = _read_yaml(args.configfile[0], "config file (--configfile)")
+    config = read_yaml(args.configfile[0], "config file (--configfile)")
     for extra in args.configfile[1:]:   # merged as Snakemake merges several --configfile
-        config = _merge(config, _read_yaml(extra, "config file (--configfile)"))
+        config = _merge(config, read_yaml(extra, "config file (--configfile)"))
     if not isinstance(config, dict) or "bulk_vs_walls" not in (config.get("accuracy") or {}):
         raise StudyInputError(f"{' '.join(args.configfile)}: missing block 'accuracy.bulk_vs_walls'")
     try:

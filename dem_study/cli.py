@@ -35,7 +35,7 @@ def _input_file(path, what: str) -> Path:
     return path
 
 
-def _read_yaml(path, what: str):
+def read_yaml(path, what: str):
     """Parse a YAML file; malformed YAML is a ``StudyInputError`` naming the file and line."""
     path = _input_file(path, what)
     try:
@@ -95,7 +95,7 @@ def analyse(args) -> int:
 
 
 def estimate(args) -> int:
-    config = _read_yaml(args.configfile, "config file (--configfile)")
+    config = read_yaml(args.configfile, "config file (--configfile)")
     if not isinstance(config, dict) or not isinstance(config.get("accuracy"), dict):
         raise analysis.StudyInputError(f"{args.configfile}: missing block 'accuracy' (the DEM study's settings)")
     if args.subset:

@@ -85,8 +85,8 @@ from scipy.integrate import RK45
 from . import laws
 from .histories import GradientSegment, History, ShearSegment
 from .integrate import (
-    COLUMNS, DEFAULT_ATOL, DEFAULT_METHOD, DEFAULT_RTOL, FRICTIONS, METHODS, POINTS_PER_STRAIN, _initial_fabric,
-    _report_times, _segment_directions, as_params, simulate,
+    COLUMNS, DEFAULT_ATOL, DEFAULT_METHOD, DEFAULT_RTOL, FRICTIONS, METHODS, POINTS_PER_STRAIN, as_params,
+    initial_fabric, report_times, segment_directions, simulate,
 )
 from .rhs import MODELS, FabricDivergence, PoleError
 
@@ -473,9 +473,9 @@ def _layout(history: History, t_eval, strain_eval, points_per_strain, label):
         if not (isinstance(seg, ShearSegment) or rest):
             raise ValueError(f"{label}: segment {k} ({type(seg).__name__}) is not simple shear or a rest; "
                              "simulate_batch handles simple shear only, use model.simulate")
-    dirs = _segment_directions(history.segments)
+    dirs = segment_directions(history.segments)
     g = np.array([1.0 if d[1] >= 0 else -1.0 for d in dirs])
-    times = _report_times(history, t_eval, strain_eval, points_per_strain)
+    times = report_times(history, t_eval, strain_eval, points_per_strain)
     L, piece, s, t, strain, gd = [], [], [], [], [], []
     for k, (seg, tk) in enumerate(zip(history.segments, times)):
         tk = np.asarray(tk, dtype=float)
@@ -701,7 +701,7 @@ def _batch_inputs(lists, n, points_per_strain):
             if key is not None and key in a0_cache:
                 A0s[i] = a0_cache[key]
             else:
-                A0s[i] = _initial_fabric(p, m, a0, (0.0, lay.g[0]))
+                A0s[i] = initial_fabric(p, m, a0, (0.0, lay.g[0]))
                 if key is not None:
                     a0_cache[key] = A0s[i]
         except ValueError as exc:   # no stable steady state: this trajectory fails, as simulate would

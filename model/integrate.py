@@ -160,7 +160,7 @@ def _check_inputs(model, method, rtol, atol, step, friction):
             raise ValueError(f"rtol = {rtol!r} is outside the allowed range [{100 * np.finfo(float).eps:.3g}, 1)")
 
 
-def _report_times(history: History, t_eval, strain_eval, points_per_strain):
+def report_times(history: History, t_eval, strain_eval, points_per_strain):
     """Return a list, per segment, of sorted report times."""
     segs = history.segments
     if t_eval is not None and strain_eval is not None:
@@ -254,16 +254,16 @@ def simulate(params, history: History, model="model1", A0=None, method=DEFAULT_M
     if not isinstance(history, History):
         raise ValueError(f"history must be a model.History, got {type(history).__name__}")
     alphas, X_c = coefficient_law(p, model)
-    seg_dir = _segment_directions(history.segments)
-    y = _initial_fabric(p, model, A0, seg_dir[0])
+    seg_dir = segment_directions(history.segments)
+    y = initial_fabric(p, model, A0, seg_dir[0])
     if method == "RK4" and step is None:
         step = _default_rk4_step(history)
-    times = _report_times(history, t_eval, strain_eval, points_per_strain)
+    times = report_times(history, t_eval, strain_eval, points_per_strain)
     t, Y, seg_idx = _integrate_segments(history, alphas, X_c, y, times, method, rtol, atol, step, max_steps)
     return _table(history, p, model, friction, t, Y, seg_idx, seg_dir, X_c)
 
 
-def _segment_directions(segs):
+def segment_directions(segs):
     """Direction of D' per segment, a rest inheriting the last defined one (the first one, at the start)."""
     dirs = [s.direction() for s in segs]
     defined = [d for d in dirs if d is not None]
@@ -275,7 +275,7 @@ def _segment_directions(segs):
     return seg_dir
 
 
-def _initial_fabric(p, model, A0, first_direction):
+def initial_fabric(p, model, A0, first_direction):
     """``A0`` checked, or the steady state for the sign of the first shear (of D'_xy in ``first_direction``)."""
     if A0 is None:
         a, b, _ = steady_state(p, model, sign=-1 if first_direction[1] < 0 else +1)

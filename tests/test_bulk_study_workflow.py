@@ -187,7 +187,7 @@ def test_tiny_study_runs_end_to_end_through_snakemake(tmp_path):
 
 
 def test_a_narrow_cell_below_the_scene_range_is_named_by_the_preflight(tmp_path):
-    from campaign import preflight
+    import preflight
     config = two_cells(tmp_path)
     config["accuracy"]["bulk_vs_walls"]["cells"]["narrow-H37-W16"] = dict(kind="walls", H_over_d=37, W_over_H=16 / 37)
     lines = preflight.check(config)

@@ -78,4 +78,4 @@ def test_fabric_fits_keep_the_steady_state_stable_even_when_the_dem_fabric_leans
     steady = {"A_xx": a, "A_xy": b, "X": Xs, "se_A_xx": 1e-4, "se_A_xy": 1e-4}
     fit = fits.fit_model2(bins, steady)
     assert fit.values["c2"] + fit.values["c3"] * Xs < 0      # alpha2 at the steady X: a stable steady state
-    assert fits._steady_fabric_residuals(-1.0, -12.0, steady, 1.0)[2] == 0.0
+    assert fits.steady_fabric_residuals(-1.0, -12.0, steady, 1.0)[2] == 0.0

@@ -1,4 +1,4 @@
-"""Bad config is stopped before any job, by the schema and campaign/preflight.py, naming the key.
+"""Bad config is stopped before any job, by the schema and preflight/checks.py, naming the key.
 
 Every case runs the real ``snakemake --dry-run`` on a copy of the CI preset with
 one thing wrong (about 1.5 s each, two at a time); a few run the pre-flight
@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from campaign import preflight
+import preflight
 
 ROOT = Path(__file__).resolve().parents[1]
 CI = yaml.safe_load((ROOT / "config" / "ci.yaml").read_text())
@@ -210,7 +210,7 @@ def test_config_file_that_cannot_be_read_is_named_with_its_line(tmp_path, text, 
     path = tmp_path / "bad.yaml"
     if text is not None:
         path.write_text(text)
-    result = subprocess.run([sys.executable, "-m", "campaign", "check", str(path)],
+    result = subprocess.run([sys.executable, "-m", "preflight", "check", str(path)],
                             cwd=ROOT, capture_output=True, text=True, timeout=60)
     assert result.returncode == 2
     lines = result.stderr.strip().splitlines()

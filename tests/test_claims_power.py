@@ -149,7 +149,7 @@ def strong_pole_differences(root, scale, seeds=8):
     c = comparison.run(dirs, root / "params.yaml", ["heaviside", "sinusoidal"], set_name="other", train_cases=[])
     diffs, _, _, _ = table.early_error_differences(inputs.runs(c.predictions.assign(in_sample=False)), "A_norm",
                                                    table.EARLY_A)
-    return table._per_seed(diffs)[1]
+    return table.per_seed(diffs)[1]
 
 
 def test_with_a_strong_pole_acting_500_disks_need_tens_of_seeds_and_16_times_more_disks_a_handful(tmp_path):

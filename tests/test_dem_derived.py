@@ -1,5 +1,4 @@
 """The quantities derived from a DEM series (dem_contract.derived): closed forms, and one value per run for every stage."""
-import importlib.util
 import json
 from pathlib import Path
 
@@ -85,10 +84,9 @@ def test_two_reversals_are_found_through_noise_spikes_and_a_rest():
 # --- one value per run, whichever stage asks ----------------------------------------------
 
 def _summary_module():
-    spec = importlib.util.spec_from_file_location("summarize_campaign", ROOT / "workflow/scripts/summarize_campaign.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    from campaign import summary
+
+    return summary
 
 
 def test_campaign_summary_calibration_and_comparison_report_the_same_steady_state_of_a_run(tmp_path):

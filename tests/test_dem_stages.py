@@ -230,11 +230,9 @@ def test_pack_converges_through_its_phases(case):
 
 
 def _packing_cost_module():
-    import importlib.util
-    spec = importlib.util.spec_from_file_location("packing_cost", ROOT / "workflow" / "scripts" / "packing_cost.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    from dem_study import packing_cost
+
+    return packing_cost
 
 
 def test_packing_cost_is_the_pack_share_of_the_case_sidecars(case, tmp_path):

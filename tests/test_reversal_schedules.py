@@ -14,7 +14,8 @@ import numpy as np
 import pytest
 import yaml
 
-from campaign import preflight
+import preflight
+from campaign.scene_spec import protocol_strain
 from dem_contract import (DEMInputError, pre_reversal_state, read_series, read_sidecar, split_transients,
                           synthetic)
 from model import default_params
@@ -122,7 +123,7 @@ def test_a_good_schedule_passes_the_preflight_and_reaches_the_scene():
     label, case = next(iter(cases(config).items()))
     scene = scenemod.validate(scene_from_config(config, case, label), "train4")
     assert len(scenemod.segments(scene, "train4")) == 4
-    assert preflight.protocol_strain("train4", config["protocols"]["train4"]) == pytest.approx(0.8)
+    assert protocol_strain("train4", config["protocols"]["train4"]) == pytest.approx(0.8)
 
 
 # --- the splitter on model-made series -------------------------------------------------------

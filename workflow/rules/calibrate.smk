@@ -6,6 +6,14 @@
 from campaign.calibration_sets import calibration_sets
 
 CALIBRATION_SETS = calibration_sets(config, CASES)  # name -> dict(cases, protocols)
+
+
+# The {calset} wildcard of every rule (calibration, comparison): one of the campaign's sets
+# (their names are checked by the pre-flight, preflight.checks.SET_NAME).
+wildcard_constraints:
+    calset="|".join(CALIBRATION_SETS),
+
+
 CALIBRATION_FIGURES = [
     "fig2a_stress_vs_Axy",
     "fig2b_mu_vs_X",
@@ -33,7 +41,7 @@ CALIBRATION_EXTRA = {
 # run), so a toggle changes only params and the params trigger reruns every set: an output
 # declared only with the option has no metadata in a finished set, and Snakemake then checks
 # neither its params nor, unless a target asks for it, that the file is missing.
-CALIBRATION_FREEFORM = bool(config.get("calibration", {}).get("freeform", False))
+CALIBRATION_FREEFORM = config["calibration"]["freeform"]
 FREEFORM_NOT_ASKED = "section,key,value,low,high,n,detail\nnote,not requested,,,,,calibration.freeform is false"
 # calibrate writes heldout_scores.csv only when a bootstrap replicate held a seed
 # out (never with one seed): the rule then leaves its header alone in the file.

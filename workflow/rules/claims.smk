@@ -14,10 +14,12 @@ from pathlib import Path
 
 CLAIMS = f"{RESULTS}/claims"
 CLAIMS_CATEGORY = "The paper's claims"
-CLAIMS_RESAMPLES = config.get("claims", {}).get("resamples", 2000)
-# Presets whose power the README section states (those whose config file exists).
-CLAIMS_PRESETS = {name: path for name, path in (("paper", "config/config.yaml"), ("bulk", "config/bulk.yaml"))
-                  if Path(path).exists()}
+CLAIMS_RESAMPLES = config["claims"]["resamples"]
+# Presets whose power the README section states (those whose config file exists), found
+# beside the Snakefile whatever the working directory (snakemake -d elsewhere).
+CLAIMS_PRESETS = {name: str(Path(workflow.basedir) / path)
+                  for name, path in (("paper", "config/config.yaml"), ("bulk", "config/bulk.yaml"))
+                  if (Path(workflow.basedir) / path).exists()}
 
 
 def dem_sidecars(wildcards=None):

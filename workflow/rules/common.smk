@@ -35,7 +35,3 @@ def all_targets():
     targets = dem_outputs() + [f"{RESULTS}/dem/campaign_summary.csv"]
     targets += calibration_targets() + compare_targets() + claims_targets() + accuracy_targets()
     return targets
-
-
-wildcard_constraints:
-    calset="[A-Za-z0-9.-]+(_[A-Za-z0-9.-]+)*",

@@ -9,7 +9,7 @@
 #   sensitivity_set: calibration set whose parameters are perturbed ("all")
 #   options: extra options of `compare predict` (e.g. "--zoom 0.05")
 
-from campaign.preflight import protocol_segments
+from campaign.scene_spec import protocol_segments
 from dem_contract.derived import reversal_kinds
 
 COMPARE = f"{RESULTS}/compare"
@@ -29,11 +29,7 @@ def protocol_kinds(protocols):
 COMPARE_KINDS = protocol_kinds(PROTOCOLS)
 COMPARE_TABLES = ["errors", "claims"]
 COMPARE_CATEGORY = "Models against the DEM"
-SENSITIVITY_SET = config.get("compare", {}).get("sensitivity_set", "all")
-
-
-wildcard_constraints:
-    calset="|".join(CALIBRATION_SETS) or "all",
+SENSITIVITY_SET = config["compare"]["sensitivity_set"]
 
 
 rule compare_predict:

@@ -1,7 +1,11 @@
-# DEM stages under YADE: scene -> pack -> preshear -> heaviside | sinusoidal.
+# DEM stages under YADE: scene -> pack -> preshear -> heaviside | sinusoidal | <schedule>.
 # One pre-shear per case feeds every reversal protocol. YADE runs on one thread,
-# so `-j2` runs two cases side by side. The DEM study (accuracy.smk) reuses these
-# rules on its own points (`use rule ... with:`).
+# so `-j2` runs two cases side by side. The chain is written once (DEM_CHAINS
+# below) and instantiated for every results folder that holds DEM cases: the
+# campaign's, the DEM resolution study's (dem_study.smk) and the bulk study's
+# (bulk_study.smk).
+from dem_study import bulk_cells
+from dem_study import grid as dem_grid
 
 wildcard_constraints:
     case="p[^/_]+_I[^/_]+_s[0-9]+",
@@ -19,93 +23,98 @@ YADE_STAGE = (
 
 
 def case_scene(label):
+    """A campaign case's scene (campaign.scenes.scene_from_config)."""
     return scene_from_config(config, CASES[label], label)
 
 
-# The scene's result-relevant content is the rule's parameter: editing any config
+def point_scene(point):
+    """A DEM-study point's scene: the campaign's with one key changed (dem_study/grid.py)."""
+    return dem_grid.point_scene(config, point)
+
+
+def bulk_scene(label):
+    """A bulk-study case's scene: the campaign's with the cell's settings (dem_study/bulk_cells.py)."""
+    return bulk_cells.case_scene(config, label)
+
+
+# Each folder of DEM cases under RESULTS: its wildcard, the scene of a case, and its
+# rules' names (the reversal rules: name -> stage, None for the campaign's {protocol}).
+DEM_CHAINS = [
+    dict(folder="dem", wildcard="case", scene_of=case_scene,
+         scene="scene", pack="dem_pack", preshear="dem_preshear", reversals={"dem_reversal": None}),
+    dict(folder="accuracy/dem", wildcard="point", scene_of=point_scene,
+         scene="dem_study_scene", pack="dem_study_pack", preshear="dem_study_preshear",
+         reversals={"dem_study_heaviside": "heaviside"}),
+    # a bulk cell with a reversal train runs it (stage `train`) in place of the Heaviside reversal
+    dict(folder="accuracy/bulk", wildcard="bulkcase", scene_of=bulk_scene,
+         scene="bulk_study_scene", pack="bulk_study_pack", preshear="bulk_study_preshear",
+         reversals={"bulk_study_heaviside": "heaviside", "bulk_study_train": "train"}),
+]
+
+
+def scene_result(chain):
+    """The scene rule's parameter: the scene's result-relevant content (a params trigger, below)."""
+    return lambda wc: result_key(chain["scene_of"](getattr(wc, chain["wildcard"])))
+
+
+def stage_case_dir(chain):
+    return lambda wc: f"{RESULTS}/{chain['folder']}/{getattr(wc, chain['wildcard'])}"
+
+
+def protocol_stage(wc):
+    return wc.protocol
+
+
+# The scene's result-relevant content is the scene rule's parameter: editing any config
 # value that enters it (material, cell, pack, sampling, a protocol's strain, ...)
 # reruns the scene and so every DEM stage of every case (Snakemake's params
 # trigger); other edits (calibration, compare, run intervals) rerun no DEM.
-rule scene:
-    output:
-        f"{RESULTS}/dem/{{case}}/scene.json",
-    params:
-        result=lambda wc: result_key(case_scene(wc.case)),
-    log:
-        f"{RESULTS}/logs/dem/{{case}}/scene.log",
-    benchmark:
-        f"{RESULTS}/benchmarks/dem/{{case}}/scene.tsv"
-    localrule: True
-    run:
-        write_scene(scene_of_result_key(params.result, config), output[0], log[0])
+for dem_chain in DEM_CHAINS:
+    dem_where = f"{dem_chain['folder']}/{{{dem_chain['wildcard']}}}"   # e.g. dem/{case}
 
+    rule:
+        name:
+            dem_chain["scene"]
+        output:
+            f"{RESULTS}/{dem_where}/scene.json",
+        params:
+            result=scene_result(dem_chain),
+        log:
+            f"{RESULTS}/logs/{dem_where}/scene.log",
+        benchmark:
+            f"{RESULTS}/benchmarks/{dem_where}/scene.tsv"
+        localrule: True
+        run:
+            write_scene(scene_of_result_key(params.result, config), output[0], log[0])
 
-rule dem_pack:
-    input:
-        scene=rules.scene.output[0],
-    output:
-        state=f"{RESULTS}/dem/{{case}}/pack.final.yade.gz",
-        series=f"{RESULTS}/dem/{{case}}/pack.csv",
-        sidecar=f"{RESULTS}/dem/{{case}}/pack.json",
-    params:
-        stage="pack",
-        case_dir=lambda wc: case_dir(wc.case),
-    resources:
-        runtime=dem_runtime("pack"),
-        mem_mb=dem_mem_mb,
-    log:
-        f"{RESULTS}/logs/dem/{{case}}/pack.log",
-    benchmark:
-        f"{RESULTS}/benchmarks/dem/{{case}}/pack.tsv"
-    threads: 1
-    shell:
-        YADE_STAGE
+    dem_stages = [(dem_chain["pack"], "pack", None), (dem_chain["preshear"], "preshear", "pack")]
+    dem_stages += [(dem_name, dem_stage, "preshear") for dem_name, dem_stage in dem_chain["reversals"].items()]
+    for dem_rule_name, dem_stage, dem_previous in dem_stages:
+        dem_stem = dem_stage or "{protocol}"
 
-
-rule dem_preshear:
-    input:
-        scene=rules.scene.output[0],
-        state=rules.dem_pack.output.state,
-    output:
-        state=f"{RESULTS}/dem/{{case}}/preshear.final.yade.gz",
-        series=f"{RESULTS}/dem/{{case}}/preshear.csv",
-        sidecar=f"{RESULTS}/dem/{{case}}/preshear.json",
-    params:
-        stage="preshear",
-        case_dir=lambda wc: case_dir(wc.case),
-    resources:
-        runtime=dem_runtime("preshear"),
-        mem_mb=dem_mem_mb,
-    log:
-        f"{RESULTS}/logs/dem/{{case}}/preshear.log",
-    benchmark:
-        f"{RESULTS}/benchmarks/dem/{{case}}/preshear.tsv"
-    threads: 1
-    shell:
-        YADE_STAGE
-
-
-rule dem_reversal:
-    input:
-        scene=rules.scene.output[0],
-        state=rules.dem_preshear.output.state,
-    output:
-        state=f"{RESULTS}/dem/{{case}}/{{protocol}}.final.yade.gz",
-        series=f"{RESULTS}/dem/{{case}}/{{protocol}}.csv",
-        sidecar=f"{RESULTS}/dem/{{case}}/{{protocol}}.json",
-    params:
-        stage=lambda wc: wc.protocol,
-        case_dir=lambda wc: case_dir(wc.case),
-    resources:
-        runtime=dem_runtime(),
-        mem_mb=dem_mem_mb,
-    log:
-        f"{RESULTS}/logs/dem/{{case}}/{{protocol}}.log",
-    benchmark:
-        f"{RESULTS}/benchmarks/dem/{{case}}/{{protocol}}.tsv"
-    threads: 1
-    shell:
-        YADE_STAGE
+        rule:
+            name:
+                dem_rule_name
+            input:
+                scene=f"{RESULTS}/{dem_where}/scene.json",
+                **({"state": f"{RESULTS}/{dem_where}/{dem_previous}.final.yade.gz"} if dem_previous else {}),
+            output:
+                state=f"{RESULTS}/{dem_where}/{dem_stem}.final.yade.gz",
+                series=f"{RESULTS}/{dem_where}/{dem_stem}.csv",
+                sidecar=f"{RESULTS}/{dem_where}/{dem_stem}.json",
+            params:
+                stage=dem_stage or protocol_stage,
+                case_dir=stage_case_dir(dem_chain),
+            resources:
+                runtime=dem_runtime(dem_stage),
+                mem_mb=dem_mem_mb,
+            log:
+                f"{RESULTS}/logs/{dem_where}/{dem_stem}.log",
+            benchmark:
+                f"{RESULTS}/benchmarks/{dem_where}/{dem_stem}.tsv"
+            threads: 1
+            shell:
+                YADE_STAGE
 
 
 rule dem_summary:
@@ -123,7 +132,9 @@ rule dem_summary:
             category="DEM campaign",
         ),
     params:
-        cases=CASES,
+        cases=" ".join(f"{label}={c['pressure']!r},{c['inertial_number']!r},{c['seed']}"
+                       for label, c in CASES.items()),
+        stages=["pack", "preshear", *PROTOCOLS],
     resources:
         runtime=COST_SMALL.runtime,
         mem_mb=COST_SMALL.mem_mb,
@@ -131,5 +142,7 @@ rule dem_summary:
         f"{RESULTS}/logs/dem/summary.log",
     benchmark:
         f"{RESULTS}/benchmarks/dem/summary.tsv"
-    script:
-        "../scripts/summarize_campaign.py"
+    threads: 1
+    shell:
+        "{PY} -m campaign.summary --dem {RESULTS}/dem --cases {params.cases} --stages {params.stages}"
+        " --out {output} > {log} 2>&1"

@@ -49,8 +49,8 @@ def dem_seconds(scene, stage):
         steps = _grid.steps_per_strain(mat["kappa"], scene["loading"]["inertial_number"], dt_over_tc)
         if stage in scene:
             steps *= scene[stage]["strain"]
-        else:   # a reversal schedule: the sum of its segments' strains (campaign.preflight)
-            from campaign.preflight import protocol_strain
+        else:   # a reversal schedule: the sum of its segments' strains (campaign.scene_spec)
+            from campaign.scene_spec import protocol_strain
 
             steps *= protocol_strain(stage, scene["schedules"][stage])
     return n * steps / _grid.throughput(n)

@@ -15,25 +15,23 @@ loader otherwise lets the last one win). Last, every scene the
 campaign would write is checked by yade_scripts' own validator, so nothing the
 DEM would refuse reaches its first job.
 
-``python -m campaign check CONFIGFILE...`` runs the same check outside Snakemake
+``python -m preflight check CONFIGFILE...`` runs the same check outside Snakemake
 (it also names a missing or malformed file with its line).
 """
 from __future__ import annotations
 
-import functools
-import importlib.util
 import math
 import re
 from pathlib import Path
 
 import yaml
 
+from campaign.calibration_sets import calibration_sets, same_value
+from campaign.cases import cases, rates
+from campaign.configfile import ConfigProblem, configfile_problems, load_configfile  # noqa: F401 (re-exported)
+from campaign.scene_spec import inertial_number_range, protocol_strain, scene_default, scene_module
+from campaign.scenes import scene_from_config
 from dem_contract.labels import case_label, format_number
-
-from .calibration_sets import calibration_sets, same_value
-from .configfile import ConfigProblem, configfile_problems, load_configfile  # noqa: F401 (re-exported)
-from .cases import cases, rates
-from .scenes import scene_from_config
 
 ROOT = Path(__file__).resolve().parents[1]
 SCHEMA = ROOT / "workflow" / "schemas" / "config.schema.yaml"
@@ -47,27 +45,7 @@ PERIODIC_MAX_W_OVER_H = 1.1
 SET_NAME = re.compile(r"^[A-Za-z0-9.-]+(_[A-Za-z0-9.-]+)*$")
 #: Top-level folders of the repository that hold code or inputs: never a results folder.
 SOURCE_FOLDERS = {"campaign", "calibrate", "claims", "compare", "config", "dem_contract", "dem_study", "docs", "model",
-                  "profiles", "tests", "workflow", "yade_scripts", ".git", ".snakemake"}
-
-
-@functools.lru_cache(maxsize=None)
-def _scene_module(root=ROOT):
-    """yade_scripts/scene.py (pure Python), loaded from its file: yade_scripts is not a package."""
-    spec = importlib.util.spec_from_file_location("_yade_scene", Path(root) / "yade_scripts" / "scene.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-def scene_default(section: str, key: str):
-    """The default the DEM takes for a scene key the config leaves out (yade_scripts/scene.py SPEC)."""
-    return _scene_module().SPEC[section][key][1]
-
-
-def inertial_number_range() -> tuple[float, float]:
-    """The inertial numbers the DEM accepts (yade_scripts/scene.py SPEC, loading.inertial_number)."""
-    spec = _scene_module().SPEC["loading"]["inertial_number"][0]
-    return spec["lo"], spec["hi"]
+                  "preflight", "profiles", "shared_stats", "tests", "workflow", "yade_scripts", ".git", ".snakemake"}
 
 
 def _v(x) -> str:
@@ -227,26 +205,6 @@ def _bulk_problems(H_over_d, bulk, gap):
                         f"two bands of {_v(bulk)} d leave no bulk in {gap} = {_v(H_over_d)}",
                         f"bulk_exclusion_d <= {(H_over_d - 1) / 2:g} (H_over_d - 2 bulk_exclusion_d >= 1)")]
     return []
-
-
-def protocol_segments(name: str, spec: dict) -> list[dict] | None:
-    """The segments of one protocol (yade_scripts/scene.py ``segments``); None when the DEM's validator refuses it.
-
-    heaviside and sinusoidal are one segment; a schedule's train shorthand is expanded.
-    """
-    module = _scene_module()
-    try:
-        if name in ("heaviside", "sinusoidal"):
-            return module.segments({name: spec}, name)
-        return module.segments({"schedules": module._check_schedules({name: spec})}, name)
-    except (module.SceneError, KeyError, TypeError):
-        return None  # scene_problems names it
-
-
-def protocol_strain(name: str, spec: dict) -> float:
-    """The strain at full rate a protocol runs (the sum of its segments')."""
-    segs = protocol_segments(name, spec)
-    return sum(seg["strain"] for seg in segs) if segs else float(spec.get("strain", 0.0))
 
 
 def protocol_problems(config: dict) -> list[str]:
@@ -470,7 +428,7 @@ def study_problems(config: dict) -> list[str]:
 
 def scene_problems(config: dict, root=ROOT) -> list[str]:
     """Every scene the campaign (and the DEM study) would write, through the DEM's own validator."""
-    module = _scene_module(root)
+    module = scene_module(root)
     validate, SceneError = module.validate, module.SceneError
     scenes = [(label, scene_from_config(config, case, label)) for label, case in cases(config).items()]
     if (config.get("accuracy") or {}).get("dem_study", False):

@@ -1,4 +1,4 @@
-"""python -m campaign check CONFIGFILE [CONFIGFILE ...]: the workflow's pre-flight check, alone.
+"""python -m preflight check CONFIGFILE [CONFIGFILE ...]: the workflow's pre-flight check, alone.
 
 Later files override earlier ones, as with ``snakemake --configfile a.yaml b.yaml``.
 Exit 0 when the campaign may start, 2 with one line per problem otherwise.
@@ -8,12 +8,13 @@ import sys
 
 from snakemake.utils import update_config
 
-from .configfile import ConfigProblem, load_configfile
-from .preflight import check
+from campaign.configfile import ConfigProblem, load_configfile
+
+from .checks import check
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m campaign", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(prog="python -m preflight", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
     c = sub.add_parser("check", help="check config files as the Snakefile does before any job")
     c.add_argument("configfiles", nargs="+")

@@ -1,6 +1,7 @@
 """What the packing costs in a DEM campaign: one row per campaign, from the stage sidecars.
 
-Called by the Snakemake rule `packing_cost` (workflow/rules/accuracy.smk). For every case
+The Snakemake rule `packing_cost` (workflow/rules/accuracy.smk) runs ``python -m
+dem_study.packing_cost --campaign NAME --sidecars <case>/<stage>.json ... --out FILE``. For every case
 the sidecars ``<stage>.json`` give ``cpu_time_s`` and ``steps`` (``dem_contract.stage_costs``: a
 missing sidecar or key is a ``DEMInputError``); the case's DEM cost is the sum over its stages
 (pack, pre-shear, protocols), and the pack's fraction of it is
@@ -9,15 +10,14 @@ missing sidecar or key is a ``DEMInputError``); the case's DEM cost is the sum o
 
 in CPU time and in steps. The row gives the means and maxima over the cases.
 """
+import argparse
 import sys
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[2]))   # the repository (Snakemake sets __file__)
-
-from dem_contract import DEMInputError, stage_costs  # noqa: E402,F401 (DEMInputError: what stage_costs raises)
+from dem_contract import DEMInputError, stage_costs
 
 #: The issue's target: the pack at most this fraction of a case's DEM time.
 TARGET_FRACTION = 0.10
@@ -53,14 +53,23 @@ def stage_order(sidecars) -> list[str]:
     return [s for s in ("pack", "preshear") if s in names] + [s for s in names if s not in ("pack", "preshear")]
 
 
-def main(snakemake):
-    stages = stage_order(snakemake.input.sidecars)
-    case_dirs = sorted({Path(p).parent for p in snakemake.input.sidecars})
-    table = packing_cost(snakemake.params.campaign, case_dirs, stages)
-    table.to_csv(snakemake.output[0], index=False, float_format="%.6g")
-    with open(snakemake.log[0], "w") as log:
-        print(table.T.to_string(), file=log)
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m dem_study.packing_cost", description=__doc__.splitlines()[0])
+    ap.add_argument("--campaign", required=True, help="the campaign's name (config key campaign)")
+    ap.add_argument("--sidecars", nargs="+", required=True, help="every <case>/<stage>.json of the campaign")
+    ap.add_argument("--out", required=True, help="the one-row table (CSV)")
+    args = ap.parse_args(argv)
+    stages = stage_order(args.sidecars)
+    case_dirs = sorted({Path(p).parent for p in args.sidecars})
+    try:
+        table = packing_cost(args.campaign, case_dirs, stages)
+    except DEMInputError as exc:   # a missing sidecar or key (stage_costs)
+        print(exc, file=sys.stderr)
+        return 1
+    table.to_csv(args.out, index=False, float_format="%.6g")
+    print(table.T.to_string())
+    return 0
 
 
-if "snakemake" in globals():
-    main(snakemake)  # noqa: F821 (injected by Snakemake's script directive)
+if __name__ == "__main__":
+    sys.exit(main())
