@@ -58,7 +58,7 @@ from dem_contract import angle_difference, fabric_angle_deg, fabric_norm
 from model import params_from_dict
 from model.laws import AlphaSpline, spline_basis, spline_of_linear, spline_size
 
-from . import fits, route2
+from . import fits, route2, shear_stability
 
 SCORES = ("early_A_norm", "A_norm", "theta_A", "mu")
 LAWS = ("freeform", "model1", "model2")
@@ -154,7 +154,8 @@ def fit_spline(replays, doc: dict, start: AlphaSpline, steady: dict, sigma_mu: f
             r = np.concatenate([route2._residual_vector(c, replays, sigma_mu, s2),
                                 fits._steady_fabric_residuals(s1, a2, steady, s2.steady_weight),
                                 _penalty_rows(sp, lam)])
-            out.append(r if np.all(np.isfinite(r)) else None)
+            stable = shear_stability.check(sp)["stable"]     # a law that cannot shear steadily: excluded
+            out.append(r if np.all(np.isfinite(r)) and stable else None)
         return out
 
     res, workers, state = route2.counted_objective(evaluate, n_res, max_evals)
