@@ -64,7 +64,7 @@ from model import params_from_dict
 from model.laws import AlphaSpline, spline_basis, spline_of_linear, spline_size
 from shared_stats import early_rmse, mean_interval
 
-from . import fits, route2
+from . import fits, route2, shear_stability
 
 SCORES = ("early_A_norm", "A_norm", "theta_A", "mu")
 LAWS = ("freeform", "model1", "model2")
@@ -186,7 +186,8 @@ def fit_spline(replays, doc: dict, start: AlphaSpline, steady: dict, sigma_mu: f
                 continue
             r = np.concatenate([route2.fit_residuals(c, replays, sigma_mu, s2, sp(float(steady["X"])), steady),
                                 _penalty_rows(sp, lam)])
-            out.append(r if np.all(np.isfinite(r)) else None)
+            stable = shear_stability.check(sp)["stable"]     # a law that cannot shear steadily: excluded
+            out.append(r if np.all(np.isfinite(r)) and stable else None)
         return out
 
     res, workers, state = route2.counted_objective(evaluate, n_res, max_evals)

@@ -14,7 +14,7 @@ from dem_contract import fabric_angle_deg, fabric_norm
 from model import default_params, params_from_dict, steady_state
 
 from . import (backsolve, bootstrap, figures, fits, freeform, identifiability, io, profiles, route1, route2,
-               smoothing, tables)
+               shear_stability, smoothing, tables)
 
 BLOCKS = ("friction_eq2", "friction_quadratic", "model1", "model2")
 #: Fewest seeds per ensemble for bootstrap intervals worth the name; below it the calibration warns.
@@ -48,7 +48,7 @@ class Settings:
 
 
 def _route2_start(replays, doc, model, r1_values, steady, sigma_mu, s2, xc_margin):
-    """First start with a finite score: the route-1 values, their linear part, the model defaults."""
+    """First start with a finite score that can shear steadily: the route-1 values, their linear part, the defaults."""
     cands = [r1_values]
     if model == "model1":
         lin = dict(r1_values, c1=-1.0, c2=1.0, X_c=max(r1_values["X_c"], fits.xc_lower_bound(steady, xc_margin) + 0.01))
@@ -64,8 +64,8 @@ def _route2_start(replays, doc, model, r1_values, steady, sigma_mu, s2, xc_margi
         except ValueError:
             continue
     scores = route2.score_many([(prm, model) for _, prm in valid], replays, s2, sigma_mu)   # one batch
-    for (c, _), sc in zip(valid, scores):
-        if math.isfinite(sc["score"]):
+    for (c, prm), sc in zip(valid, scores):   # a start that cannot shear steadily would be a flat, failed objective
+        if math.isfinite(sc["score"]) and shear_stability.check_block(prm, model)["stable"]:
             return dict(c)
     return dict(r1_values)
 
@@ -172,22 +172,28 @@ def fit_route2(cases, samples, steady, r1, doc1, settings: Settings, log):
 def fit_freeform(replays, doc2, steady, r1, out: Path, settings: Settings, log):
     """Step 5b (only with ``settings.freeform``): free-form alphas against Models 1 and 2, ``freeform.csv``.
 
-    Returns the curves for Figs. 3a, 3b (``freeform.curves_for_figure``), or None when the step is off.
+    Returns the curves for Figs. 3a, 3b (``freeform.curves_for_figure``) and the ``fit_quality.csv`` row of
+    the free-form set's shear stability (``shear_stability.check``), or (None, None) when the step is off.
     """
     if settings.freeform is None:
-        return None
+        return None, None
     seeds = sorted({r.case for r in replays})
     if len(seeds) < 2:
         note = f"free-form fit skipped: its cross-validation leaves one seed out and needs 2 or more, got {seeds}"
         log(f"warning: {note}")
         tables.write_csv(freeform.note_table(note), out / "freeform.csv")
-        return None
+        return None, None
     t0 = time.process_time()
     res = freeform.run(replays, doc2, steady, r1["sigma_mu"], settings.route2, settings.freeform, log)
     tables.write_csv(res["table"], out / "freeform.csv")
     log(f"free-form fit done ({time.process_time() - t0:.1f} s CPU)")
+    v = shear_stability.check(res["spline"])
+    if not v["stable"]:
+        log(f"shear stability: freeform curves (free-form alphas) refused: {v['note']}")
+    row = {"model": "freeform", "route": "curves", "default": False, "shear_stable": v["stable"],
+           "shear_note": v["note"], "fit_message": res["fit"]["message"]}
     br = res["spline"].breaks
-    return freeform.curves_for_figure(res, np.linspace(br[0], br[-1], 200))
+    return freeform.curves_for_figure(res, np.linspace(br[0], br[-1], 200)), row
 
 
 def run_bootstrap(cases, samples, replays, r1, r2, doc1, settings: Settings, log):
@@ -318,6 +324,50 @@ def score_routes(replays, heldout, r1, r2, doc1, doc2, settings: Settings):
     for q in quality:
         q["default"] = default_route[q["model"]] == q["route"]
     return quality, default_route
+
+
+class UnstableFit(ValueError):
+    """Every route of a model fitted a set that cannot shear steadily: the calibration refuses it."""
+
+
+def guard_shear_stability(quality, default_route, doc1, doc2, log) -> dict:
+    """Step 7a': every fitted Model 1 and Model 2 set must shear steadily (``shear_stability.check``).
+
+    Each row of ``quality`` gets ``shear_stable`` and ``shear_note`` (the failures in
+    words), every failing set is named in the log, and a model's default route moves
+    to the other route when its own set fails and the other's passes.
+
+    Returns
+    -------
+    dict
+        The default routes, after the guard.
+
+    Raises
+    ------
+    UnstableFit
+        Both routes of a model fitted sets that cannot shear steadily.
+    """
+    default_route = dict(default_route)
+    verdicts = {}
+    for q in quality:
+        doc = doc1 if q["route"] == "backsolve" else doc2
+        v = shear_stability.check_block(doc, q["model"])
+        verdicts[(q["model"], q["route"])] = v
+        q["shear_stable"], q["shear_note"] = v["stable"], v["note"]
+        if not v["stable"]:
+            log(f"shear stability: {q['model']} {q['route']} ({tables.ROUTE_NAMES[q['route']]}) refused: {v['note']}")
+    for model in ("model1", "model2"):
+        ok = [route for route in ("backsolve", "curves") if verdicts[(model, route)]["stable"]]
+        if not ok:
+            raise UnstableFit(f"{model}: no fitted set can shear steadily (backsolve: "
+                              f"{verdicts[(model, 'backsolve')]['note']}; curves: {verdicts[(model, 'curves')]['note']}); "
+                              f"the calibration refuses them")
+        if default_route[model] not in ok:
+            log(f"shear stability: {model} default route {default_route[model]} -> {ok[0]}")
+            default_route[model] = ok[0]
+    for q in quality:
+        q["default"] = default_route[q["model"]] == q["route"]
+    return default_route
 
 
 def heldout_means(h: pd.DataFrame) -> dict:
@@ -542,17 +592,18 @@ def run(case_dirs, out, settings: Settings = Settings(), log=print, argv=None) -
     r1, doc1 = fit_route1(samples, steady, friction, settings)
     log(f"route 1 done ({time.time() - t0:.1f} s): {int(r1['bins']['used'].sum())} of {len(r1['bins'])} bins used")
     replays, r2, doc2 = fit_route2(cases, samples, steady, r1, doc1, settings, log)
-    free = fit_freeform(replays, doc2, steady, r1, out, settings, log)
+    free, free_row = fit_freeform(replays, doc2, steady, r1, out, settings, log)
     values, heldout, iv = run_bootstrap(cases, samples, replays, r1, r2, doc1, settings, log)
     log(f"bootstrap done ({time.time() - t0:.1f} s)")
     prof, prof_iv, svd, verdict = identify(replays, r1, r2, doc1, steady, iv, settings, log)
     log(f"identifiability done ({time.time() - t0:.1f} s)")
     iv = reported_intervals(iv, values, doc1, doc2, prof_iv, cases)
     quality, default_route = score_routes(replays, heldout, r1, r2, doc1, doc2, settings)
+    default_route = guard_shear_stability(quality, default_route, doc1, doc2, log)
     final = final_document(doc1, doc2, default_route)
     xc_bound = xc_lower_bounds(r1, steady, settings)
     compare_steady(quality, final, doc1, doc2, steady, xc_bound)
-    quality += friction_quality(r1)
+    quality += friction_quality(r1) + ([free_row] if free_row else [])
     for q in quality:
         q["warning"] = warning
     ptab = parameter_table(doc1, doc2, iv, default_route, xc_bound)

@@ -182,8 +182,16 @@ def profile(replays, base_doc: dict, model: str, fitted: dict, steady: dict, sig
     return out[COLUMNS + [c for c in out.columns if c not in COLUMNS]]
 
 
-def interval(prof: pd.DataFrame, lower: float = -math.inf, upper: float = math.inf) -> dict:
+#: Why a profile's neighbour cannot be re-fitted, per model: only Model 1 has a pole (Eq. 6).
+UNFITTABLE = {"model1": "the pole, not the data",
+              "model2": "a set that diverges or cannot shear steadily: the model, not the data"}
+
+
+def interval(prof: pd.DataFrame, lower: float = -math.inf, upper: float = math.inf, model: str = "model1") -> dict:
     """The profile interval of one parameter's profile rows (module Notes).
+
+    ``model`` names the cause of an end where no re-fit can be integrated (``UNFITTABLE``):
+    Model 1's pole, or, for Model 2 (no pole), a set that diverges or cannot shear steadily.
 
     Returns
     -------
@@ -211,7 +219,8 @@ def interval(prof: pd.DataFrame, lower: float = -math.inf, upper: float = math.i
                 notes.append(f"{side} end open: beyond the grid")
             return (bound if np.isfinite(bound) else (-math.inf if side == "lower" else math.inf)), False
         if not np.isfinite(d[j]):   # the neighbour cannot be integrated: the model, not the data, ends it
-            notes.append(f"{side} end at {v[j]:.4g}, where no re-fit can be integrated (the pole, not the data)")
+            notes.append(f"{side} end at {v[j]:.4g}, where no re-fit can be integrated "
+                         f"({UNFITTABLE.get(model, UNFITTABLE['model2'])})")
             return float(v[j]), False
         dj = d[j]
         return float(v[i] + (thr - d[i]) * (v[j] - v[i]) / (dj - d[i])), True
@@ -228,5 +237,5 @@ def intervals(prof: pd.DataFrame, x_lower: float) -> pd.DataFrame:
     rows = []
     for (model, name), p in prof.groupby(["model", "parameter"], sort=False):
         lo, hi = bounds_of(model, name, x_lower)
-        rows.append({"model": model, "parameter": name, **interval(p, lo, hi)})
+        rows.append({"model": model, "parameter": name, **interval(p, lo, hi, model)})
     return pd.DataFrame(rows, columns=["model", "parameter", "low", "high", "identified", "note"])

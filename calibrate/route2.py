@@ -20,7 +20,9 @@ not smoothed):
     w_\mu\frac{g\sigma_{xy}/p|_m - g\sigma_{xy}/p}{\sigma_\mu}
 
 with each run's sample noise, plus the steady-state residuals of ``fits``. A
-parameter set that runs into the pole, or has no stable steady state, gets a
+parameter set that runs into the pole, or cannot shear steadily (no stable
+steady state of simple shear, or forward shear from isotropy leaving the
+physical fabrics within a few strains: ``calibrate.shear_stability``), gets a
 large constant residual. The friction law is held at its route-1 fit (Eq. 2 for
 Model 1, the quadratic law for Model 2). ``scipy.optimize.least_squares`` (trf,
 2-point Jacobian with relative step ``diff_step``) runs under a budget of
@@ -59,7 +61,7 @@ from dem_contract import angle_difference, fabric_angle_deg, fabric_norm, pre_re
 from model import PoleError, params_from_dict, simulate, steady_shear
 from model.batched import simulate_batch
 
-from . import fits
+from . import fits, shear_stability
 from .fits import FitResult
 
 PENALTY = 1e3
@@ -466,8 +468,8 @@ def _objective(replays, base_params, model, keys, scale, steady, sigma_mu, setti
                fixed=None):
     """The residual function of ``fit``, its ``workers`` map, and the state they keep (``counted_objective``).
 
-    A trial set that cannot be integrated (pole, divergence, no steady state) is a failed
-    point; with the batched integrator the Jacobian's points are integrated in one batch.
+    A trial set that cannot be integrated (pole, divergence) or cannot shear steadily
+    (``shear_stability.check``) is a failed point; with the batched integrator the Jacobian's points are integrated in one batch.
     ``fixed`` (name -> value) holds parameters of the block out of ``keys`` at those values.
     """
     friction = "eq2" if model == "model1" else "quadratic"
@@ -485,7 +487,7 @@ def _objective(replays, base_params, model, keys, scale, steady, sigma_mu, setti
             except FAILURES:
                 pass
         got = curves([(prm, model, friction) for _, _, prm in trials], replays, settings)
-        for (k, vals, _), c in zip(trials, got):
+        for (k, vals, prm), c in zip(trials, got):
             try:
                 if isinstance(c, Exception):
                     raise c
@@ -493,6 +495,8 @@ def _objective(replays, base_params, model, keys, scale, steady, sigma_mu, setti
                                   steady)
                 if not np.all(np.isfinite(r)):
                     raise ValueError("non-finite residuals")
+                if not shear_stability.check_block(prm, model)["stable"]:
+                    raise ValueError("cannot shear steadily")     # penalised to exclusion
                 out[k] = r
             except FAILURES:
                 pass

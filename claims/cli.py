@@ -71,7 +71,7 @@ def main(argv=None) -> int:
         tab.to_csv(out / "paper_claims.csv", index=False, float_format="%.6g")
         report.forest_plot(tab, out / "paper_claims.png")
         pw, cost = power.power_table(inputs.runs(pred), args.dem, tab)
-        pw.to_csv(out / "power.csv", index=False, float_format="%.6g")
+        power.with_unknown_costs(pw).to_csv(out / "power.csv", index=False, float_format="%.6g")
         presets = [power.preset_from_config(*_preset(p), cost) for p in args.preset]
         section = report.markdown_section(tab, source=f"`{out / 'paper_claims.csv'}`")
         section += "\n" + report.power_section(pw, presets, power.campaign_preset(pw), power.fabric_noise_check(args.dem))

@@ -59,6 +59,11 @@ from dem_contract import REVERSAL_PROTOCOLS, DEMInputError, read_series, stage_c
 from . import margins, table
 
 ALPHA = 0.05
+#: What power.csv and the README section say for a cost the DEM's sidecars do not record (a case with no
+#: pack stage, data without timing sidecars or disk counts): the cost is unknown, not a number.
+UNKNOWN = "unknown"
+#: The columns of the power table that need the DEM's cost (disks, CPU time).
+COST_COLUMNS = ("disks_per_seed", "particles", "core_hours")
 POWER = 0.8
 MIN_EFFECT_FRACTION = margins.FALL_FRACTION   # the minimal effect is the claim's margin
 EFFECTS = ("measured", "minimal")
@@ -171,8 +176,9 @@ def fabric_noise_check(case_dirs) -> dict:
     """
     measured, expected = [], []
     for d in map(Path, case_dirs):
+        # n_contacts may be NaN (imported DEM data without contact counts): the expectation is then unknown
         pre = read_series(d / "preshear.csv", ("t", "strain", "A_xx", "A_xy", "n_contacts"), 10,
-                          what="the pre-shear of the case")
+                          what="the pre-shear of the case", finite=("t", "strain", "A_xx", "A_xy"))
         pre = pre[pre["strain"].abs() >= pre["strain"].abs().max() / 2]
         s = pre["strain"].abs().to_numpy()
         for c in ("A_xx", "A_xy"):
@@ -180,7 +186,7 @@ def fabric_noise_check(case_dirs) -> dict:
             measured.append(float(np.std(x - np.polyval(np.polyfit(s, x, 1), s), ddof=2)))
         expected.append(1.0 / math.sqrt(8.0 * pre["n_contacts"].mean()))
     m, e = float(np.mean(measured)), float(np.mean(expected))
-    return {"measured": m, "independent_contacts": e, "ratio": m / e}
+    return {"measured": m, "independent_contacts": e, "ratio": m / e if np.isfinite(e) else math.nan}
 
 
 def transients_per_seed(pairs) -> float:
@@ -227,6 +233,19 @@ def power_table(runs: dict, case_dirs, table_rows: pd.DataFrame, protocols=REVER
                 transients_per_seed=k0, seeds_needed=n, transients=n * k0, particles=n * cost["disks"],
                 core_hours=n * seed_cpu / 3600.0, power_measured=power_t(v.size, sd, delta)))
     return pd.DataFrame(rows, columns=COLUMNS), cost
+
+
+def with_unknown_costs(power: pd.DataFrame, float_format: str = "%.6g") -> pd.DataFrame:
+    """The power table as written to power.csv: a cost column's NaN (``COST_COLUMNS``) says ``UNKNOWN``.
+
+    The numbers of those columns are formatted with ``float_format`` (the rest of the
+    table keeps its types), so the file reads as before where the costs are known.
+    """
+    out = power.copy()
+    for c in COST_COLUMNS:
+        v = pd.to_numeric(out[c], errors="coerce")
+        out[c] = [UNKNOWN if np.isnan(x) else float_format % x for x in v.to_numpy(float)]
+    return out
 
 
 # --------------------------------------------------------------------------- presets

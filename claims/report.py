@@ -102,11 +102,11 @@ def _n(x):
     return "no finite number" if not np.isfinite(x) else f"{x:,.0f}"
 
 
-def _core_hours(x):
-    """Core-hours as text; a cost the stage sidecars do not give is 'unknown', not NaN."""
-    if x == np.inf:
-        return "no finite number of core-hours"
-    return "unknown core-hours" if not np.isfinite(x) else f"{x:.2g} core-hours"
+def _cost(x, fmt: str) -> str:
+    """A DEM cost (disks, core-hours) formatted, or ``claims.power.UNKNOWN`` when the sidecars do not record it."""
+    if np.isnan(x):
+        return pw.UNKNOWN
+    return format(x, fmt) if np.isfinite(x) else "no finite number of"
 
 
 def power_section(power, presets: list, campaign: dict, noise: dict) -> str:
@@ -127,14 +127,18 @@ def power_section(power, presets: list, campaign: dict, noise: dict) -> str:
              f"From the seed-to-seed s.d. of the paired differences (claims 4 and 7), the seeds needed for the 95 % "
              f"interval to exclude 0 with {pw.POWER:.0%} power (noncentral t; `power.csv`). Assumed: the per-seed s.d. "
              f"falls as N^-1/2 in disks and k^-1/2 in scored transients per seed; the fabric's per-sample noise in "
-             f"the steady pre-shear is {noise['measured']:.4f}, {noise['ratio']:.2f} times that of independent "
-             f"contacts (1/sqrt(8 n_c)): contact-sampling noise, which falls as N^-1/2. Minimal effect: "
+             f"the steady pre-shear is {noise['measured']:.4f}, " + (
+                 f"{noise['ratio']:.2f} times that of independent contacts (1/sqrt(8 n_c)): contact-sampling "
+                 f"noise, which falls as N^-1/2" if np.isfinite(noise["ratio"]) else
+                 "against independent contacts unknown (the data hold no contact counts, n_contacts)") +
+             f". Minimal effect: "
              f"{pw.MIN_EFFECT_FRACTION:.0%} of the DEM's fall over the window.", ""]
     for _, r in power.iterrows():
         lines.append(f"- claim {r['claim_id']} ({r['quantity']}), {r['effect_choice']} effect {r['effect']:.2g} "
-                     f"(s.d. per seed {r['sd_per_seed']:.2g} at {r['disks_per_seed']:.0f} disks, "
+                     f"(s.d. per seed {r['sd_per_seed']:.2g} at {_cost(r['disks_per_seed'], '.0f')} disks, "
                      f"{r['transients_per_seed']:g} transients per seed): {_n(r['seeds_needed'])} seeds, "
-                     f"{_n(r['particles'])} disk-seeds, {_core_hours(r['core_hours'])} at this campaign's "
+                     f"{_n(r['particles']) if np.isfinite(r['disks_per_seed']) else pw.UNKNOWN} disk-seeds, "
+                     f"{_cost(r['core_hours'], '.2g')} core-hours at this campaign's "
                      f"settings (power now {r['power_measured']:.2f}).")
     lines.append("")
     for p in [campaign, *presets]:
@@ -143,7 +147,7 @@ def power_section(power, presets: list, campaign: dict, noise: dict) -> str:
             x = pw.reach(r, p["seeds"], p["disks"], p["transients"])
             verdicts.append(f"claim {r['claim_id']} {r['effect_choice']}: {'yes' if x['reached'] else 'no'} "
                             f"({_n(x['seeds_needed'])} seeds needed, power {x['power']:.2f})")
-        lines.append(f"- the {p['name']} preset ({p['seeds']} seeds x {p['disks']:.0f} disks x "
+        lines.append(f"- the {p['name']} preset ({p['seeds']} seeds x {_cost(p['disks'], '.0f')} disks x "
                      f"{p['transients']:g} scored transients): " + "; ".join(verdicts) + ".")
     lines.append("- a preset of S seeds x N disks x k scored transients reaches a row when S >= the seeds needed at "
                  "s.d. x sqrt(N0 k0 / (N k)) (N0, k0: this campaign's). A measured effect of the wrong sign "

@@ -18,10 +18,11 @@ Conventions
   ``reversals``): ``load_reversals`` splits it into one ``Reversal`` per
   reversal (``dem_contract.split_transients``), each from its reversal to the
   next, started from the state just before it.
-- The initial fabric ``A0`` is the mean of ``(A_xx, A_xy)`` over the pre-shear
-  samples within ``a0_window`` strain of its end (``dem_contract.pre_reversal_state``,
-  the same state the calibration bounds X_c with): the DEM fabric just before
-  the reversal, with its per-sample noise averaged down.
+- The initial fabric ``A0`` is ``(A_xx, A_xy)`` at the reversal, estimated over
+  the samples within ``a0_window`` strain of the end of the leg before it
+  (``dem_contract.pre_reversal_state``, the same state the calibration bounds X_c
+  with): the mean of the steady pre-shear, or, before a schedule's later reversal,
+  a straight line fitted to the moving transient and taken at its end (no lag).
 - ``steady_A`` (= |mean A|) and ``steady_mu`` (mean mu) are the steady values
   of the pre-shear (``dem_contract.steady_values``: the last half of its
   strain, the values the calibration and the campaign summary report), the
@@ -54,7 +55,7 @@ from dem_contract.derived import mirror_reversal, reversal_kinds
 PROTOCOL_NAME = re.compile(r"^[a-z][a-z0-9_]*$")
 
 USED_COLUMNS = ("t", "strain", "gammadot", "A_xx", "A_xy", "mu")
-A0_WINDOW = PRE_REVERSAL_WINDOW   # strain over which the pre-reversal fabric is averaged
+A0_WINDOW = PRE_REVERSAL_WINDOW   # strain over which the fabric at the reversal is estimated
 MIN_SAMPLES = 10
 
 

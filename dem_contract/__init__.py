@@ -15,7 +15,9 @@ stage. It needs numpy, pandas, scipy and ``model.laws`` (``model`` never
 imports ``dem_contract``).
 
 ``dem_contract.synthetic`` (it needs ``model``) writes model-made cases in the
-same layout, for tests and trial runs.
+same layout, for tests and trial runs; ``dem_contract.importer`` (``python -m
+dem_contract import``) writes external runs, a minimal CSV per run and a YAML
+of case metadata, into it (docs/own-dem-data.md).
 """
 from .costs import COST_KEYS, stage_costs
 from .derived import (MIN_PRE_REVERSAL_SAMPLES, PRE_REVERSAL_WINDOW, STEADY_FRACTION, angle_difference, axial_mean,

@@ -170,7 +170,8 @@ def _check_strain_integral(path: Path, data: pd.DataFrame) -> None:
     gammadot are all finite. Between two rows of opposite rates (a sharp
     reversal inside a run, whose jump lies somewhere in the step) only
     :math:`|\Delta\gamma_i| \le (1 + r) \max(|\dot\gamma_{i-1}|, |\dot\gamma_i|)\,\Delta t_i`
-    is required.
+    is required; the same holds for the step of a start from rest (the rows
+    at rest at the start of the run, then the first moving one: ``_steps_from_rest``).
 
     Raises
     ------
@@ -186,9 +187,10 @@ def _check_strain_integral(path: Path, data: pd.DataFrame) -> None:
     trap = 0.5 * (g[1:] + g[:-1]) * dt
     tol = STRAIN_REL_TOL * (np.maximum(np.abs(ds), np.abs(trap)) + np.median(np.abs(g)) * dt)
     bad = np.abs(ds - trap) > tol
-    # a sharp reversal between two rows (a reversal schedule's heaviside segment): the rate jumps
-    # somewhere in the step, so only the bound |ds| <= (1 + r) max(|g_i-1|, |g_i|) dt holds there
-    sharp = np.sign(g[1:]) * np.sign(g[:-1]) < 0
+    # a sharp reversal between two rows (a reversal schedule's heaviside segment), or a start from rest
+    # (the wall speed steps from 0 between the row at rest and the next one): the rate jumps somewhere
+    # in the step, so only the bound |ds| <= (1 + r) max(|g_i-1|, |g_i|) dt holds there
+    sharp = (np.sign(g[1:]) * np.sign(g[:-1]) < 0) | _steps_from_rest(g)
     bad[sharp] = np.abs(ds[sharp]) > (1 + STRAIN_REL_TOL) * np.maximum(np.abs(g[1:]), np.abs(g[:-1]))[sharp] * dt[sharp]
     if bad.any():
         k = int(np.argmax(bad))
@@ -247,6 +249,23 @@ def _check_sampling_grid(path: Path, data: pd.DataFrame) -> None:
             f"{path}: a gap in the sampling grid between data rows {k + 1} and {k + 2} (t {t[k]:.6g} to "
             f"{t[k + 1]:.6g}: a step of {dt[k]:.6g}, at most {allowed[k]:.6g} allowed, {rule}): rows are "
             f"missing ({int(bad.sum())} gap(s) in all)")
+
+#: A row is at rest when its |gammadot| is below this fraction of the run's median |gammadot|.
+REST_FRACTION = 0.1
+
+
+def _steps_from_rest(g: np.ndarray) -> np.ndarray:
+    r"""Steps of the rate from rest at the start of a run, between consecutive rows.
+
+    True for the step from row :math:`i-1` to row :math:`i` when every row up to
+    :math:`i-1` is at rest (:math:`|\dot\gamma| \le` ``REST_FRACTION`` times the
+    median :math:`|\dot\gamma|`) and row :math:`i` is not: a start from rest, where
+    the wall speed steps from 0 somewhere in the time step, as in every external
+    run that starts its pre-shear at t = 0 with the walls still.
+    """
+    rest = np.abs(g) <= REST_FRACTION * np.median(np.abs(g))
+    leading = np.logical_and.accumulate(rest)       # the rows at rest before the first move
+    return leading[:-1] & ~rest[1:]
 
 
 def read_sidecar(path) -> dict:

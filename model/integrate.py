@@ -109,6 +109,41 @@ def steady_state(params, model="model1", sign=+1):
     if sign not in (1, -1):
         raise ValueError(f"sign = {sign!r} must be +1 or -1")
     alphas, X_c = coefficient_law(p, model)
+    stable = stable_steady_states(alphas, X_c)
+    if not stable:
+        hi = min(1.0, X_c * (1.0 - 1e-9)) if math.isfinite(X_c) else 1.0
+        raise ValueError(f"{model}: no stable steady state of simple shear with X in [-1, {hi:.4g}) and "
+                         f"|A| <= 1/sqrt(2) for these parameters")
+    if len(stable) > 1:
+        from .histories import steady_shear
+        tab = simulate(p, steady_shear(50.0), model=model, A0=(0.0, 0.0), strain_eval=[50.0], method="Radau")
+        Xend = float(tab["X"].iloc[-1])
+        stable.sort(key=lambda r: abs(r[2] - Xend))
+    a, b, X = stable[0]
+    return float(a), float(b) * sign, float(X)
+
+
+def stable_steady_states(alphas, X_c=math.inf) -> list:
+    r"""Every linearly stable, physical fixed point of Eq. 4 in simple shear (gammadot > 0), any law alpha(X).
+
+    The roots of :math:`X = -\alpha_1(X)\alpha_2(X)/(2 + \alpha_2(X)^2)` on
+    ``[-1, min(1, X_c))`` (``steady_state``'s bracketing), kept where
+    :math:`|A| \le 1/\sqrt2` and the Jacobian of Eq. 4 has eigenvalues with
+    negative real parts.
+
+    Parameters
+    ----------
+    alphas : callable
+        ``alphas(X) -> (alpha1, alpha2)``, vectorised over an array of X
+        (Models 1 and 2, ``laws.AlphaSpline``).
+    X_c : float
+        Pole (``inf`` for none).
+
+    Returns
+    -------
+    list of (a, b, X)
+        Empty when simple shear has no stable steady state.
+    """
     hi = min(1.0, X_c * (1.0 - 1e-9)) if math.isfinite(X_c) else 1.0
     f = lambda X: X - laws.steady_state_constant(*alphas(float(X)))[2]  # noqa: E731
     grid = np.linspace(-1.0, hi, 4001)
@@ -127,16 +162,7 @@ def steady_state(params, model="model1", sign=+1):
         a, b, _ = laws.steady_state_constant(*alphas(float(X)))
         if a * a + b * b <= 0.25 and _is_stable(alphas, a, b, X_c):  # physical: |A| <= 1/sqrt(2)
             stable.append((a, b, X))
-    if not stable:
-        raise ValueError(f"{model}: no stable steady state of simple shear with X in [-1, {hi:.4g}) and "
-                         f"|A| <= 1/sqrt(2) for these parameters")
-    if len(stable) > 1:
-        from .histories import steady_shear
-        tab = simulate(p, steady_shear(50.0), model=model, A0=(0.0, 0.0), strain_eval=[50.0], method="Radau")
-        Xend = float(tab["X"].iloc[-1])
-        stable.sort(key=lambda r: abs(r[2] - Xend))
-    a, b, X = stable[0]
-    return float(a), float(b) * sign, float(X)
+    return stable
 
 
 # --------------------------------------------------------------------------- simulate

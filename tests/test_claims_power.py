@@ -118,7 +118,8 @@ def test_command_line_writes_the_power_table_and_the_readme_paragraph(compared, 
                                         zip(minimal["sd_per_seed"], minimal["effect"])]).all()
     section = (tmp_path / "README_section.md").read_text()
     assert "### Power" in section and "the paper preset (4 seeds x" in section
-    assert pw["core_hours"].isna().all()      # model-made cases carry no DEM cost
+    assert (pw["core_hours"] == power.UNKNOWN).all()   # model-made cases carry no DEM cost: "unknown", not NaN
+    assert "unknown core-hours" in section and "nan core-hours" not in section
 
 
 def test_command_line_names_a_bad_preset_and_exits_2(compared, tmp_path, capsys):

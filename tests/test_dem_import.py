@@ -1,0 +1,228 @@
+"""External DEM data through ``python -m dem_contract import`` (docs/own-dem-data.md), on model-made runs.
+
+The runs are written by the model itself (``dem_contract.synthetic``, the
+calibration's defaults: the DEM's noise, a pre-shear from isotropy) and then
+put into the minimal format a user brings: one CSV per run holding the whole
+history, with only the required columns, a start from rest (the wall speed
+steps from 0 at t = 0), and a metadata YAML.
+"""
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+import yaml
+
+from calibrate import synthetic
+from dem_contract import DEMInputError, read_series
+from dem_contract.importer import MINIMAL_COLUMNS, import_cases
+from model import default_params
+
+ROOT = Path(__file__).resolve().parents[1]
+PRESHEAR = 2.0
+
+
+def run_cli(*args, cwd=None):
+    return subprocess.run([sys.executable, "-m", *args], cwd=cwd or ROOT, capture_output=True, text=True)
+
+
+def minimal_runs(made: Path, out: Path, seed: int, protocols, mirror=False, extra=()):
+    """The model-made case ``made`` as the minimal CSVs a user brings: one per run, pre-shear included, from rest."""
+    pre = pd.read_csv(made / "preshear.csv")
+    files = {}
+    for protocol in protocols:
+        run = pd.read_csv(made / f"{protocol}.csv").iloc[1:]      # its first row is the pre-shear's last
+        whole = pd.concat([pre, run], ignore_index=True)[list(MINIMAL_COLUMNS) + list(extra)]
+        whole.loc[0, "gammadot"] = 0.0                           # at rest at t = 0
+        if mirror:                                               # a simulator shearing towards -x
+            for c in ("strain", "gammadot", "A_xy", "sigma_xy"):
+                whole[c] = -whole[c]
+        name = f"seed{seed}_{protocol}.csv"
+        whole.to_csv(out / name, index=False)
+        files[protocol] = name
+    return files
+
+
+def reversal_strains(protocol, schedules):
+    """The strains at which a run reverses (the pre-shear ends at ``PRESHEAR``; a schedule's segments follow)."""
+    if protocol not in (schedules or {}):
+        return [PRESHEAR]
+    out, at, prev = [], PRESHEAR, 1
+    for length, direction, *_ in schedules[protocol]:
+        if direction != prev:
+            out.append(at)
+        at, prev = at + direction * length, direction
+    return out
+
+
+def write_external(tmp: Path, seeds=(1, 2, 3), protocols=("heaviside", "sinusoidal"), schedules=None, cell=None,
+                   mirror=False, extra=(), costs=None, I=1e-3):
+    """Model-made runs in the minimal format plus their metadata YAML under ``tmp``; returns the YAML's path."""
+    made, ext = tmp / "made", tmp / "external"
+    ext.mkdir(parents=True, exist_ok=True)
+    runs_of = [*protocols, *(schedules or {})]
+    sign = -1 if mirror else 1
+    cases = []
+    for s in seeds:
+        case = synthetic.write_case(made / f"s{s}", default_params(), seed=s, preshear_strain=PRESHEAR,
+                                    I=I, protocols=protocols, schedules=schedules)
+        files = minimal_runs(case, ext, s, runs_of, mirror, extra)
+        runs = [{"file": files[p], "protocol": p,
+                 "reversals": [{"strain": sign * x} | ({"transition_strain": 0.1} if p == "sinusoidal" else {})
+                               for x in reversal_strains(p, schedules)]}
+                for p in runs_of]
+        cases.append({"seed": s, "runs": runs} | ({"costs": costs} if costs else {}))
+    meta = {"pressure": 1.0e5, "inertial_number": I, "simulator": "model-made test data", "cases": cases}
+    if cell:
+        meta["cell"] = cell
+    (ext / "case.yaml").write_text(yaml.safe_dump(meta, sort_keys=False))
+    return ext / "case.yaml"
+
+
+# --------------------------------------------------------------------------- the reader: a start from rest
+
+
+def test_reader_accepts_a_start_from_rest_and_still_refuses_a_strain_jump(tmp_path):
+    t = np.arange(0.0, 10.0, 1.0)
+    g = np.where(t == 0.0, 0.0, 1e-3)                 # the walls start at t = 0 from rest
+    strain = np.concatenate([[0.0], 1e-3 * t[1:]])    # the rate stepped at once: the first step is 1e-3 dt
+    d = pd.DataFrame({"t": t, "strain": strain, "gammadot": g})
+    d.to_csv(tmp_path / "rest.csv", index=False)
+    assert len(read_series(tmp_path / "rest.csv", ("t", "strain", "gammadot"))) == 10
+    d.loc[5:, "strain"] += 0.3                          # a jump later in the run is still refused
+    d.to_csv(tmp_path / "jump.csv", index=False)
+    with pytest.raises(DEMInputError, match=r"jump\.csv: strain jumps by \+0\.301 between data rows 5 and 6"):
+        read_series(tmp_path / "jump.csv", ("t", "strain", "gammadot"))
+
+
+# --------------------------------------------------------------------------- import -> calibrate -> compare -> claims
+
+CALIBRATE_OPTIONS = ["--bootstrap", "4", "--bootstrap-evals", "20", "--route2-evals", "40", "--min-bin-samples", "8",
+                     "--profile-points", "0", "--no-figures"]
+
+
+def pipeline(meta: Path, root: Path, sets: dict, protocols):
+    """The packages' command lines on imported data: import, calibrate and compare per set, claims; returns the DEM dirs."""
+    done = run_cli("dem_contract", "import", "--meta", str(meta), "--out", str(root / "dem"))
+    assert done.returncode == 0, done.stderr
+    dirs = sorted(str(d) for d in (root / "dem").iterdir())
+    labels = [Path(d).name for d in dirs]
+    for name, trained in sets.items():
+        done = run_cli("calibrate", "--dem", *dirs, "--protocols", *trained, "--out", str(root / "cal" / name),
+                       *CALIBRATE_OPTIONS)
+        assert done.returncode == 0, done.stdout[-2000:] + done.stderr
+        done = run_cli("compare", "predict", "--dem", *dirs, "--params", str(root / "cal" / name / "params.yaml"),
+                       "--set", name, "--protocols", *protocols, "--train-cases", *labels,
+                       "--train-protocols", *trained, "--out", str(root / "compare" / name))
+        assert done.returncode == 0, done.stdout[-2000:] + done.stderr
+    done = run_cli("claims", "--compare", str(root / "compare"), "--dem", *dirs, "--protocols", *protocols,
+                   "--calibration", str(root / "cal" / "all" / "params.yaml"), "--sets", *sets,
+                   "--resamples", "200", "--out", str(root / "claims"))
+    assert done.returncode == 0, done.stdout[-2000:] + done.stderr
+    return dirs
+
+
+SCHEDULES = {"double": [(0.15, -1), (0.4, 1)]}    # a double reversal: back after 0.15 strain
+COSTS = {"pack": {"cpu_time_s": 100.0}, "preshear": {"cpu_time_s": 200.0}, "heaviside": {"cpu_time_s": 30.0},
+         "double": {"cpu_time_s": 30.0}}
+
+
+@pytest.fixture(scope="module")
+def from_rest(tmp_path_factory):
+    """Three seeds started from rest, a Heaviside and a sinusoidal run each, through the whole chain."""
+    root = tmp_path_factory.mktemp("from_rest")
+    meta = write_external(root, cell={"H_over_d": 12, "W_over_H": 4})
+    dirs = pipeline(meta, root, {"all": ["heaviside", "sinusoidal"], "heaviside_only": ["heaviside"]},
+                    ["heaviside", "sinusoidal"])
+    return root, dirs
+
+
+@pytest.fixture(scope="module")
+def other_cell(tmp_path_factory):
+    """Three seeds of a tall narrow cell (H = 37 d, W = 24 d) sheared towards -x, a Heaviside and a double reversal."""
+    root = tmp_path_factory.mktemp("other_cell")
+    meta = write_external(root, protocols=("heaviside",), schedules=SCHEDULES, cell={"H_over_d": 37, "W_over_H": 0.65},
+                          mirror=True, extra=("gap",), costs=COSTS)
+    dirs = pipeline(meta, root, {"all": ["heaviside", "double"], "heaviside_only": ["heaviside"]},
+                    ["heaviside", "double"])
+    return root, dirs
+
+
+def test_import_keeps_the_start_from_rest_and_states_the_reversal(from_rest):
+    root, dirs = from_rest
+    case = Path(dirs[0])
+    pre = pd.read_csv(case / "preshear.csv")
+    assert pre["gammadot"].iloc[0] == 0.0 and pre["strain"].iloc[-1] == pytest.approx(PRESHEAR)
+    side = json.loads((case / "sinusoidal.json").read_text())
+    assert side["reversal_strain"] == pytest.approx(PRESHEAR)
+    assert side["reversals"] == [{"t": side["reversal_t"], "strain": side["reversal_strain"], "direction": -1,
+                                  "transition": "half_cosine", "transition_strain": 0.1}]
+    assert pd.read_csv(case / "heaviside.csv")["t"].iloc[0] > side["reversal_t"]
+    assert json.loads((case / "scene.json").read_text())["geometry"] == {"H_over_d": 12.0, "W_over_H": 4.0}
+
+
+def test_imported_runs_are_followed_by_both_models_within_the_noise(from_rest):
+    root, _ = from_rest
+    err = pd.read_csv(root / "compare" / "all" / "errors.csv")
+    seeds = err[err["level"] == "seed"]
+    assert set(seeds["protocol"]) == {"heaviside", "sinusoidal"} and len(seeds) == 3 * 2 * 2
+    assert (seeds["status"] == "ok").all()
+    # the model made the data: what is left is the noise (0.0125 per fabric component, 0.04 in mu)
+    assert seeds["rmse_A_norm"].max() < 2 * np.sqrt(2) * 0.0125 and seeds["rmse_mu"].max() < 0.06
+
+
+def test_claims_of_imported_data_name_the_unknown_cost(from_rest):
+    root, _ = from_rest
+    table = pd.read_csv(root / "claims" / "paper_claims.csv")
+    assert len(table) >= 10 and table["verdict"].notna().all()
+    power = pd.read_csv(root / "claims" / "power.csv")
+    assert (power["core_hours"] == "unknown").all()            # no pack stage, no timing sidecar
+    section = (root / "claims" / "README_section.md").read_text()
+    assert "unknown core-hours" in section and "nan" not in section.split("### Power")[1].split("\n- the")[0]
+
+
+def test_import_mirrors_a_pre_shear_towards_minus_x_and_splits_a_double_reversal(other_cell):
+    root, dirs = other_cell
+    case = Path(dirs[0])
+    pre = pd.read_csv(case / "preshear.csv")
+    assert (pre["gammadot"].iloc[1:] > 0).all() and pre["strain"].iloc[-1] == pytest.approx(PRESHEAR)
+    assert json.loads((case / "preshear.json").read_text())["mirrored"] is True
+    side = json.loads((case / "double.json").read_text())
+    assert [(r["strain"], r["direction"]) for r in side["reversals"]] == [(pytest.approx(PRESHEAR), -1),
+                                                                          (pytest.approx(PRESHEAR - 0.15), 1)]
+    assert json.loads((case / "scene.json").read_text())["geometry"] == {"H_over_d": 37.0, "W_over_H": 0.65}
+    err = pd.read_csv(root / "compare" / "heaviside_only" / "errors.csv")
+    out = err[(err["level"] == "seed") & ~err["in_sample"]]
+    assert set(out["protocol"]) == {"double_r1", "double_r2"} and (out["status"] == "ok").all()
+    assert out["rmse_A_norm"].max() < 2 * np.sqrt(2) * 0.0125
+
+
+def test_claims_of_a_case_with_costs_state_its_core_hours(other_cell):
+    root, _ = other_cell
+    power = pd.read_csv(root / "claims" / "power.csv")
+    seed_cpu = 100.0 + 200.0 + power["transients_per_seed"] * 30.0      # pack + pre-shear + scored transients
+    expected = power["seeds_needed"] * seed_cpu / 3600.0
+    assert np.allclose(power["core_hours"].astype(float), expected, rtol=1e-5)
+    assert (power["disks_per_seed"] == "unknown").all()                  # the metadata give no N
+
+
+# --------------------------------------------------------------------------- bad metadata, named
+
+
+def test_import_names_a_reversal_strain_the_run_never_reaches(tmp_path):
+    meta = write_external(tmp_path, seeds=(1,), protocols=("heaviside",))
+    text = yaml.safe_load(meta.read_text())
+    text["cases"][0]["runs"][0]["reversals"][0]["strain"] = 9.0
+    meta.write_text(yaml.safe_dump(text))
+    with pytest.raises(DEMInputError, match=r"seed1_heaviside\.csv: reversal 1 at strain 9: the run's strain never "
+                                            r"reaches it"):
+        import_cases(meta, tmp_path / "dem")
+
+
+def test_import_names_a_missing_metadata_key_and_exits_2(tmp_path):
+    (tmp_path / "case.yaml").write_text("pressure: 1.0e5\ncases: []\n")
+    done = run_cli("dem_contract", "import", "--meta", str(tmp_path / "case.yaml"), "--out", str(tmp_path / "dem"))
+    assert done.returncode == 2 and "case.yaml: missing key 'inertial_number'" in done.stderr
