@@ -195,7 +195,7 @@ def passage_row(dem: dict, boot) -> dict:
     r"""Claim 3: in the DEM theta_A always passes through 90 degrees.
 
     Statistic: A_xx at the first sign change of A_xy (``dem_contract.passage``, the DEM smoothed), averaged per
-    seed over its reversals of one kind (``_per_seed``), mean over seeds with its interval. Reproduced when the
+    seed over its reversals of one kind (``per_seed``), mean over seeds with its interval. Reproduced when the
     interval lies below 0 and no run crosses clearly through 0/180; contradicted when it lies above 0 or one run
     clearly crosses the horizontal ('always'); a run too close to isotropic to call (unclear) counts neither way:
     its A_xx enters its seed's mean with its own small weight, and it is no counter-example.
@@ -205,7 +205,7 @@ def passage_row(dem: dict, boot) -> dict:
         axes.append(c["axis"])
         if c["axis"] != "none":
             _add(values, case, _kind(dem[(case, *_)]), c["A_xx_cross"])
-    _, v = _per_seed(values)
+    _, v = per_seed(values)
     est, lo, hi, n = boot(v)
     against = axes.count("0/180")
     clear = axes.count("90") + against
