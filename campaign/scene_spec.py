@@ -44,7 +44,7 @@ def protocol_segments(name: str, spec: dict) -> list[dict] | None:
     try:
         if name in ("heaviside", "sinusoidal"):
             return module.segments({name: spec}, name)
-        return module.segments({"schedules": module._check_schedules({name: spec})}, name)
+        return module.segments({"schedules": module.check_schedules({name: spec})}, name)
     except (module.SceneError, KeyError, TypeError):
         return None  # scene_problems names it
 

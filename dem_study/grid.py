@@ -43,7 +43,7 @@ REPEAT_PREFIX = "repeat:"
 # disks; interpolated log-log in N, held constant outside. 500 disks: the
 # `particle_steps_per_s` of the quick campaign's sidecars (496 disks, kappa 1e3,
 # 2 cores with two YADE jobs side by side) read 2.2-2.5 M; we take 2.3 M.
-# 5,000 disks: 0.8 M (python3 yade_scripts/benchmark.py, README "Accuracy and cost").
+# 5,000 disks: 0.8 M (python3 tools/benchmark.py, README "Accuracy and cost").
 THROUGHPUT_500 = 2.3e6
 THROUGHPUT_5000 = 0.8e6
 THROUGHPUT = ((500, THROUGHPUT_500), (5000, THROUGHPUT_5000))

@@ -45,7 +45,8 @@ PERIODIC_MAX_W_OVER_H = 1.1
 SET_NAME = re.compile(r"^[A-Za-z0-9.-]+(_[A-Za-z0-9.-]+)*$")
 #: Top-level folders of the repository that hold code or inputs: never a results folder.
 SOURCE_FOLDERS = {"campaign", "calibrate", "claims", "compare", "config", "dem_contract", "dem_study", "docs", "model",
-                  "preflight", "profiles", "shared_stats", "tests", "workflow", "yade_scripts", ".git", ".snakemake"}
+                  "preflight", "profiles", "shared_stats", "tests", "tools", "workflow", "yade_scripts", "data",
+                  ".git", ".snakemake"}
 
 
 def _v(x) -> str:

@@ -1,6 +1,5 @@
 """campaign/: the case table and the scene files the workflow writes."""
 import copy
-import importlib.util
 import os
 from pathlib import Path
 
@@ -8,6 +7,7 @@ import pytest
 import yaml
 
 from campaign.cases import cases
+from campaign.scene_spec import scene_module
 from campaign.scenes import result_key, scene_from_config, scene_of_result_key, write_scene
 from dem_contract.labels import parse_case_label
 
@@ -16,10 +16,7 @@ QUICK = yaml.safe_load((ROOT / "config" / "quick.yaml").read_text())
 
 
 def scene_validator():
-    spec = importlib.util.spec_from_file_location("yade_scene", ROOT / "yade_scripts" / "scene.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module.validate
+    return scene_module().validate
 
 
 def test_cases_cover_every_pressure_rate_and_seed_under_parseable_labels():

@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from campaign import preflight
+import preflight
 
 ROOT = Path(__file__).resolve().parents[1]
 CI = yaml.safe_load((ROOT / "config" / "ci.yaml").read_text())

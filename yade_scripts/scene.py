@@ -212,7 +212,7 @@ def validate(raw, stage=None):
             raise SceneError(f"scene error: section '{sec}' must be a JSON object")
         out[sec] = _check_keys(sec, src, keys)
     if SCHEDULES in raw:  # (absent: the validated scene stays as it was before schedules existed)
-        out[SCHEDULES] = _check_schedules(raw[SCHEDULES])
+        out[SCHEDULES] = check_schedules(raw[SCHEDULES])
     if stage is not None and stage not in STAGES and stage not in out.get(SCHEDULES, {}):
         raise SceneError(f"scene error: stage {stage!r} is neither one of {', '.join(STAGES)} nor a schedule of "
                          f"the scene's '{SCHEDULES}' section ({', '.join(out.get(SCHEDULES, {})) or 'none'})")
@@ -275,7 +275,7 @@ def _check_transition(name, o, length_key):
     return o
 
 
-def _check_schedules(raw):
+def check_schedules(raw):
     """The `schedules` section: name -> {"schedule": [segment, ...]} or {"train": {...}}."""
     if not isinstance(raw, dict):
         raise SceneError(f"scene error: section '{SCHEDULES}' must be a JSON object (name -> schedule)")
