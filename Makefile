@@ -31,8 +31,12 @@ paper: setup
 	$(VENV)/bin/snakemake -j2
 	$(VENV)/bin/snakemake --report results/report.html
 
+# The suite on both cores (pytest-xdist, one test file per worker so that a module's fixture
+# runs once), then the tests marked serial (a Slurm daemon, signal timing) alone.
+# On one core, without xdist: $(PY) -m pytest -q -p no:xdist
 test: setup
-	$(PY) -m pytest -q
+	$(PY) -m pytest -q -n 2 --dist loadfile -m "not serial"
+	$(PY) -m pytest -q -p no:xdist -m serial
 
 # The CI preset through profiles/slurm on a one-node Slurm started here (root;
 # workflow/scripts/slurm_local.sh up/down; about 10 minutes).

@@ -1,25 +1,14 @@
 """Scene validation, engine lists and the two-disk restitution, with real YADE."""
 import copy
 import json
-import os
-import subprocess
-import sys
-from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
-YS = ROOT / "yade_scripts"
-sys.path.insert(0, str(YS))
-import scene as scenemod  # noqa: E402  (pure Python, no YADE)
+from tests.helpers import YS, yade, yade_module
+
+scenemod = yade_module("scene")  # pure Python, no YADE; yade_scripts/ stays off sys.path
 
 TINY = json.loads((YS / "examples" / "tiny.json").read_text())
-
-
-def yade(*args, cwd=None, timeout=300):
-    env = dict(os.environ, OMP_NUM_THREADS="1")
-    return subprocess.run(["yade", "-n", "-x", *map(str, args)], capture_output=True, text=True,
-                          cwd=cwd, timeout=timeout, env=env)
 
 
 def write(tmp_path, sc, name="scene.json"):
