@@ -32,6 +32,7 @@ include: "workflow/rules/calibrate.smk"
 include: "workflow/rules/compare.smk"
 include: "workflow/rules/claims.smk"
 include: "workflow/rules/accuracy.smk"
+include: "workflow/rules/report.smk"
 
 
 rule all:

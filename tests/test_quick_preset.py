@@ -15,7 +15,7 @@ from tests.helpers import ROOT, counts, dry_run
 #: Rules of the study the quick preset must keep (DEM, calibration, comparison, claims, and
 #: what accuracy costs in the study itself: the ODE work-precision and the packing's share).
 STUDY = {"dem_pack", "dem_preshear", "dem_reversal", "calibrate", "compare_predict", "claims",
-         "ode_work_precision", "packing_cost"}
+         "ode_work_precision", "packing_cost", "claims_table_html", "packing_table_html", "calibration_tables_html"}
 
 
 @pytest.fixture(scope="module")

@@ -151,7 +151,7 @@ def as_run(line):
 
 
 def test_the_readme_shows_the_set_up_the_presets_and_the_cluster():
-    """Guards the extraction: the commands a newcomer copies are all fenced, so all of them are run."""
+    """Guards the extraction: the commands a new user copies are all fenced, so all of them are run."""
     lines = [line for _, line in COMMANDS]
     for expected in ("make quick", "make test", "--configfile config/quick.yaml", "--profile profiles/slurm",
                      "python -m campaign check", "--report", "results/claims/README_section.md"):

@@ -1,5 +1,6 @@
-"""The Snakemake report carries the verdict: the claims, packing and calibration tables are in it,
-and every caption names the preset and the cases it shows.
+"""The Snakemake report carries the verdict: the claims, packing and calibration tables are in it
+(as HTML, which the report shows inline; workflow/rules/report.smk), and every caption names the
+preset and the cases it shows.
 
 Captions (workflow/report/*.rst) are Jinja templates Snakemake renders with the job's config,
 wildcards and params; here each is rendered the same way with every preset's own config
@@ -71,7 +72,10 @@ def report_flags(module_workflow_dir):
                 for rule in workflow._workflow.rules for f in rule.output}
 
 
-@pytest.mark.parametrize("table", ["claims/paper_claims.csv", "claims/paper_claims.png", "accuracy/packing_cost.csv",
-                                   "calibration/{calset}/params_table.csv", "calibration/{calset}/fit_quality.csv"])
+#: The report shows HTML and images inline and offers a CSV for download: each verdict table is in it as both.
+@pytest.mark.parametrize("table", ["claims/paper_claims.csv", "claims/paper_claims.html", "claims/paper_claims.png",
+                                   "accuracy/packing_cost.csv", "accuracy/packing_cost.html",
+                                   "calibration/{calset}/params_table.csv", "calibration/{calset}/params_table.html",
+                                   "calibration/{calset}/fit_quality.csv", "calibration/{calset}/fit_quality.html"])
 def test_the_verdict_tables_are_in_the_report(table, report_flags):
     assert report_flags.get(table), (table, sorted(k for k, v in report_flags.items() if v))
