@@ -5,7 +5,7 @@ VENV  := .venv
 PY    := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: setup yade venv quick paper test slurm-test lint clean
+.PHONY: setup yade venv quick paper bench test slurm-test lint clean
 
 setup: yade venv
 
@@ -21,7 +21,7 @@ $(STAMP): requirements.txt
 	$(PY) -m pip install -q -r requirements.txt
 	touch $(STAMP)
 
-# The quick campaign: every figure and table in results/ in about 10 minutes on 2 cores.
+# The quick campaign: every figure and table of the study in results/ (its time: README, "The presets and what each costs").
 quick: setup
 	$(VENV)/bin/snakemake -j2 --configfile config/quick.yaml
 	$(VENV)/bin/snakemake --configfile config/quick.yaml --report results/report.html
@@ -31,9 +31,21 @@ paper: setup
 	$(VENV)/bin/snakemake -j2
 	$(VENV)/bin/snakemake --report results/report.html
 
+# Benchmarks of the code's own speed, in no preset's study: the batched integrator against a
+# loop of model.simulate (about a minute) and every calibration set of the quick campaign with
+# the per-run and the batched integrator (about 11 minutes of one core); the quick campaign's
+# DEM and calibration run first where results/ lacks them.
+BENCH := results/accuracy/batched_cost.csv results/accuracy/calibration_cost.csv
+bench: setup
+	$(VENV)/bin/snakemake -j2 $(BENCH) --configfile config/quick.yaml
+
+# The suite on both cores (pytest-xdist, one test file per worker so that a module's fixture
+# runs once), then the tests marked serial (a Slurm daemon, signal timing) alone.
+# On one core, without xdist: $(PY) -m pytest -q -p no:xdist
 test: setup
 	$(VENV)/bin/lint-imports --no-cache
-	$(PY) -m pytest -q
+	$(PY) -m pytest -q -n 2 --dist loadfile -m "not serial"
+	$(PY) -m pytest -q -p no:xdist -m serial
 
 # The CI preset through profiles/slurm on a one-node Slurm started here (root;
 # workflow/scripts/slurm_local.sh up/down; about 10 minutes).

@@ -35,6 +35,7 @@ include: "workflow/rules/pole_start.smk"
 include: "workflow/rules/accuracy.smk"
 include: "workflow/rules/dem_study.smk"
 include: "workflow/rules/bulk_study.smk"
+include: "workflow/rules/report.smk"
 
 
 # One writer per results folder, from any working directory (campaign/results_lock.py): only a

@@ -1,8 +1,6 @@
 """The bulk-vs-walls study in the workflow: one DEM case per (cell, seed) through the campaign's
 rules, nothing of it with the study off, and a bad cell stopped before any job, naming the key."""
 import shutil
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -11,9 +9,8 @@ import pytest
 import yaml
 
 from dem_study import bulk_cells
-from tests.test_dem_study_workflow import counts
-
-ROOT = Path(__file__).resolve().parents[1]
+from tests import helpers
+from tests.helpers import ROOT, counts, snakemake
 QUICK = yaml.safe_load((ROOT / "config" / "quick.yaml").read_text())
 
 
@@ -30,12 +27,10 @@ def two_cells(tmp_path):
 
 
 def dry_run(config, tmp_path, *targets):
-    """Snakemake's dry run of ``targets`` (before --quiet, whose choices would swallow them) on ``config``."""
+    """Snakemake's dry run of ``targets`` on ``config``, in a working copy of its own under ``tmp_path``."""
     path = tmp_path / "config.yaml"
     path.write_text(yaml.safe_dump(config))
-    return subprocess.run([sys.executable, "-m", "snakemake", "-n", *targets, "--quiet", "rules",
-                           "--configfile", str(path)],
-                          cwd=ROOT, capture_output=True, text=True, timeout=300)
+    return helpers.dry_run(*targets, "--configfile", path, cwd=helpers.workflow_copy(tmp_path / "workflow"))
 
 
 def test_two_cells_one_seed_plan_one_dem_case_per_cell(tmp_path):
@@ -63,15 +58,14 @@ def test_the_analysis_target_plans_the_dem_cases_and_no_campaign(tmp_path):
     assert not any(rule.startswith("dem_") or rule.startswith("calibrat") for rule in c), c
 
 
-def test_the_shipped_overlay_plans_every_cell_and_seed_and_nothing_of_the_campaign():
+def test_the_shipped_overlay_plans_every_cell_and_seed_and_nothing_of_the_campaign(workflow_dir):
     """config/bulk_validation.yaml over config/quick.yaml, as its header says to run it."""
     overlay = yaml.safe_load((ROOT / "config" / "bulk_validation.yaml").read_text())["accuracy"]["bulk_vs_walls"]
     seeds = {name: len(spec.get("seeds", overlay["seeds"])) for name, spec in overlay["cells"].items()}
     n = sum(seeds.values())
     n_train = sum(k for name, k in seeds.items() if "train" in overlay["cells"][name])
-    result = subprocess.run([sys.executable, "-m", "snakemake", "-n", "bulk_vs_walls", "--quiet", "rules",
-                             "--forceall", "--configfile", "config/quick.yaml", "config/bulk_validation.yaml"],
-                            cwd=ROOT, capture_output=True, text=True, timeout=300)
+    result = helpers.dry_run("bulk_vs_walls", "--configfile", "config/quick.yaml", "config/bulk_validation.yaml",
+                             cwd=workflow_dir)
     assert result.returncode == 0, result.stderr[-3000:]
     c = counts(result.stdout)
     assert c.get("bulk_study_heaviside") == n - n_train and c.get("bulk_study_train") == n_train > 0
@@ -154,7 +148,7 @@ def test_estimate_grows_with_disks_and_lists_every_case(tmp_path):
 @pytest.mark.yade
 @pytest.mark.slow
 @pytest.mark.skipif(shutil.which("yade") is None, reason="needs YADE (Debian package yade)")
-def test_tiny_study_runs_end_to_end_through_snakemake(tmp_path):
+def test_tiny_study_runs_end_to_end_through_snakemake(tmp_path, workflow_dir):
     """Two real ~100-disk cells (walls and periodic) x two seeds, to the table and the figure."""
     config = yaml.safe_load((ROOT / "config" / "ci.yaml").read_text())
     config["results_dir"] = str(tmp_path / "results")
@@ -169,8 +163,7 @@ def test_tiny_study_runs_end_to_end_through_snakemake(tmp_path):
         preshear_strain=0.6, heaviside_strain=0.2, steady_window=0.3, early_strain=0.1))
     path = tmp_path / "config.yaml"
     path.write_text(yaml.safe_dump(config))
-    result = subprocess.run([sys.executable, "-m", "snakemake", "-j1", "bulk_vs_walls", "--configfile", str(path)],
-                            cwd=ROOT, capture_output=True, text=True, timeout=900)
+    result = snakemake("-j1", "bulk_vs_walls", "--configfile", path, cwd=workflow_dir, timeout=900)
     assert result.returncode == 0, result.stderr[-3000:]
     out = Path(config["results_dir"]) / "accuracy"
     table = pd.read_csv(out / "bulk_vs_walls.csv")

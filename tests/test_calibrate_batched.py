@@ -17,7 +17,7 @@ from calibrate.backsolve import BacksolveSettings
 from calibrate.io import read_cases, steady_values
 from calibrate.smoothing import smooth_cases
 from model import params_from_dict
-from tests.test_calibrate_roundtrip import TRUTH_M1, truth_params
+from tests.helpers import TRUTH_M1, truth_params
 
 SIGMA_MU = 0.04
 TIGHT = dict(rtol=1e-10, atol=1e-12)

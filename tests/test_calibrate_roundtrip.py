@@ -26,19 +26,11 @@ from calibrate.io import read_cases
 from calibrate.smoothing import smooth_cases
 from calibrate.backsolve import BacksolveSettings
 from calibrate.profiles import ProfileSettings
-from model import default_params, load_params, params_from_dict, steady_state
+from model import load_params, steady_state
+from tests.helpers import TRUTH_M1, truth_params
 
 #: Coarser profiles than the default (20 points), to keep the fixture's cost down.
 PROFILE = ProfileSettings(n_points=8, evals=30)
-TRUTH_M1 = dict(a1=-0.85, b1=0.0, c1=-3000.0, a2=-5.0, b2=100.0, c2=2000.0, X_c=0.0827)
-
-
-def truth_params():
-    d = default_params().to_dict()
-    d["model1"] = dict(TRUTH_M1)
-    return params_from_dict(d)
-
-
 def rel(x, y):
     return abs(x - y) / abs(y)
 

@@ -10,14 +10,13 @@ import math
 import subprocess
 import sys
 from concurrent.futures import ThreadPoolExecutor
-from pathlib import Path
 
 import pytest
 import yaml
 
 import preflight
+from tests.helpers import ROOT, snakemake, workflow_copy
 
-ROOT = Path(__file__).resolve().parents[1]
 CI = yaml.safe_load((ROOT / "config" / "ci.yaml").read_text())
 # without extra calibrate options: checking them imports calibrate (seconds), needed only by their own cases
 CI["calibration"]["options"] = ""
@@ -132,8 +131,8 @@ def config_text(edit):
 
 
 def dry_run(path):
-    return subprocess.run([sys.executable, "-m", "snakemake", "-n", "--configfile", str(path)],
-                          cwd=ROOT, capture_output=True, text=True, timeout=300)
+    """The dry run of config ``path`` in a working copy of its own (next to the file)."""
+    return snakemake("-n", "--configfile", path, cwd=workflow_copy(path.parent / f"{path.stem}-workflow"))
 
 
 @pytest.fixture(scope="module")

@@ -16,64 +16,7 @@ from claims.inputs import read_dem_case
 from claims.table import claims_table
 from compare import comparison
 from dem_contract import fabric_angle_deg
-from dem_contract.synthetic import FABRIC_NOISE, MU_NOISE, write_ensemble
-from model import default_params, params_from_dict, save_params
-
-NOISE_LENGTH = 0.01    # strain over which the DEM's noise stays correlated (a few contact lifetimes)
-# Noise of a cell 16 times larger than the 500-disk reference (noise ~ N^-1/2). At the 500-disk level four
-# seeds cannot tell the models apart on the early |A| (the noisy pre-reversal fabric moves Model 1's start
-# along its pole): the table then says "inconclusive" or worse, which is the power question, not this test's.
-NOISE_SCALE = 0.25
-
-
-def strong_pole_params():
-    """Model 1 with a strong pole (c_i five times the defaults); Model 2 = Model 1's linear part."""
-    d = default_params().to_dict()
-    d.pop("provenance", None)
-    d["model1"].update(c1=-1000.0, c2=5000.0)
-    return params_from_dict(d)
-
-
-def ar1_noise(rng, s, sd, length):
-    """Gaussian noise of standard deviation ``sd`` correlated over ``length`` of strain (AR(1) on the samples)."""
-    e = np.empty(len(s))
-    e[0] = rng.normal(0.0, sd)
-    r = np.exp(-np.abs(np.diff(s)) / length)
-    for i in range(1, len(s)):
-        e[i] = r[i - 1] * e[i - 1] + np.sqrt(1.0 - r[i - 1] ** 2) * rng.normal(0.0, sd)
-    return e
-
-
-def add_correlated_noise(case, seed):
-    rng = np.random.default_rng(1000 + seed)
-    for stage in ("preshear", "heaviside", "sinusoidal"):
-        path = case / f"{stage}.csv"
-        d = pd.read_csv(path)
-        s = np.abs(d["strain"] - d["strain"].iloc[0]).to_numpy()
-        for c in ("A_xx", "A_xy"):
-            d[c] += ar1_noise(rng, s, NOISE_SCALE * FABRIC_NOISE, NOISE_LENGTH)
-        d["sigma_xy"] += ar1_noise(rng, s, NOISE_SCALE * MU_NOISE, NOISE_LENGTH)
-        d["mu"] = np.abs(d["sigma_xy"]) / d["p"]
-        d.to_csv(path, index=False)
-
-
-def comparison_for_truth(root, truth):
-    """4 noisy seeds made by ``truth`` under ``root/dem``, compared with both models at the known parameters."""
-    params = strong_pole_params()
-    dirs = write_ensemble(root / "dem", params, seeds=(1, 2, 3, 4), model=truth,
-                          friction="eq2" if truth == "model1" else "quadratic",
-                          preshear_strain=0.5, reversal_strain=0.6, coarse=0.005)
-    for k, d in enumerate(dirs):
-        add_correlated_noise(d, k)
-    save_params(params, root / "params.yaml")
-    c = comparison.run(dirs, root / "params.yaml", ["heaviside", "sinusoidal"], set_name="other", train_cases=[])
-    return dirs, c
-
-
-def table_of(dirs, c):
-    """Claims table of a comparison's curves (every run out of sample: the comparison had train_cases=[])."""
-    pred = c.predictions.assign(in_sample=False)
-    return claims_table(pred, [read_dem_case(d) for d in dirs], eq2=None, n_resamples=1000).set_index("claim_id")
+from tests.helpers import comparison_for_truth, table_of
 
 
 @pytest.fixture(scope="module")

@@ -10,9 +10,8 @@ import pytest
 
 from claims.inputs import dem_curves
 from claims.table import Bootstrap, dem_passages, passage_row
-from compare import comparison
 from dem_contract.passage import passage
-from tests.test_claims import comparison_for_truth
+from tests.helpers import comparison_for_truth
 
 S = np.linspace(0.0, 0.5, 251)
 

@@ -5,7 +5,6 @@ values (the stated power reached within its binomial interval), its table and co
 table, and, with YADE, that extending ``seeds:`` reruns no finished seed.
 """
 import math
-import shutil
 
 import numpy as np
 import pandas as pd
@@ -95,21 +94,6 @@ def test_command_line_names_a_table_without_margins_and_exits_2(tmp_path, capsys
     assert main(["plan", "--table", str(tmp_path / "old.csv"), "--dem", str(tmp_path), "--out",
                  str(tmp_path / "p.csv")]) == 2
     assert "old.csv: column(s) null, paper_side, margin, sd, n, verdict missing" in capsys.readouterr().err
-
-
-# --------------------------------------------------------------------------- more seeds reuse the finished ones
-
-from tests.test_workflow_reruns import DEM_RULES, finished, planned  # noqa: E402,F401  (the tiny YADE campaign)
-
-
-@pytest.mark.yade
-@pytest.mark.slow
-def test_extending_seeds_plans_only_the_new_seeds_dem(finished):
-    if shutil.which("yade") is None:
-        pytest.skip("needs YADE (Debian package yade)")
-    counts = planned(finished, lambda c: c.update(seeds=[*c["seeds"], 3]), "one_more_seed", all_targets=True)
-    assert {rule: counts.get(rule) for rule in DEM_RULES} == {rule: 1 for rule in DEM_RULES}, counts
-    assert counts.get("claims_plan") == 1 and counts.get("claims") == 1
 
 
 def test_power_paragraph_names_an_unmeasured_cost_unknown():

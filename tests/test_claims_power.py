@@ -11,6 +11,7 @@ from claims.cli import main
 from compare import comparison
 from dem_contract.synthetic import FABRIC_NOISE, MU_NOISE, write_ensemble
 from model import default_params, save_params
+from tests.helpers import add_correlated_noise, strong_pole_params
 
 Z = stats.norm.ppf(0.975) + stats.norm.ppf(0.8)     # 2.8016: the normal form's factor
 
@@ -135,17 +136,12 @@ def test_command_line_names_a_bad_preset_and_exits_2(compared, tmp_path, capsys)
 def strong_pole_differences(root, scale, seeds=8):
     """Per-seed differences of claim 4 on model-made data, Model 1 with a strong pole the truth, at ``scale`` x
     one 500-disk run's serially correlated noise (the generator and noise of tests/test_claims.py)."""
-    import test_claims as tc
     from claims import inputs, table
-    params = tc.strong_pole_params()
+    params = strong_pole_params()
     dirs = write_ensemble(root / "dem", params, seeds=tuple(range(1, seeds + 1)), model="model1", friction="eq2",
                           preshear_strain=0.5, reversal_strain=0.6, coarse=0.005)
-    tc.NOISE_SCALE, kept = scale, tc.NOISE_SCALE
-    try:
-        for k, d in enumerate(dirs):
-            tc.add_correlated_noise(d, k)
-    finally:
-        tc.NOISE_SCALE = kept
+    for k, d in enumerate(dirs):
+        add_correlated_noise(d, k, scale)
     save_params(params, root / "params.yaml")
     c = comparison.run(dirs, root / "params.yaml", ["heaviside", "sinusoidal"], set_name="other", train_cases=[])
     diffs, _, _, _ = table.early_error_differences(inputs.runs(c.predictions.assign(in_sample=False)), "A_norm",

@@ -17,9 +17,9 @@ import time
 import numpy as np
 import pytest
 
-from tests.test_dem_stages import RUN, command, make_scene, read, yade
+from tests.helpers import RUN, command, make_scene, read, yade
 
-pytestmark = pytest.mark.yade
+pytestmark = [pytest.mark.yade, pytest.mark.serial]  # timing of signals between processes: run alone
 ENV = dict(os.environ, OMP_NUM_THREADS="1")
 
 

@@ -9,10 +9,10 @@ import shutil
 import numpy as np
 import pytest
 
-from tests.test_dem_stages import (RUN, assert_pack_restored_the_grains_own_friction_and_damping,
-                                   assert_resumed_without_gap_or_duplicate, kill_preshear_after_first_checkpoint,
-                                   read, run_all_stages, yade)
-from tests.test_dem_stages import make_scene as make_stage_scene
+from tests.helpers import (RUN, assert_pack_restored_the_grains_own_friction_and_damping,
+                           assert_resumed_without_gap_or_duplicate, kill_preshear_after_first_checkpoint, read,
+                           run_all_stages, yade)
+from tests.helpers import make_scene as make_stage_scene
 
 pytestmark = pytest.mark.yade
 

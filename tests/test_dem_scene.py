@@ -1,27 +1,17 @@
 """Scene validation, engine lists and the two-disk restitution, with real YADE."""
 import copy
-import json
 import os
 import subprocess
-import sys
-from pathlib import Path
+import json
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
-YS = ROOT / "yade_scripts"
+from tests.helpers import ROOT, YS, yade, yade_module
+
+scenemod = yade_module("scene")  # pure Python, no YADE; yade_scripts/ stays off sys.path
 TOOLS = ROOT / "tools"
-sys.path.insert(0, str(YS))
-import scene as scenemod  # noqa: E402  (pure Python, no YADE)
 
 TINY = json.loads((YS / "examples" / "tiny.json").read_text())
-
-
-def yade(script, *args, cwd=None, timeout=300):
-    """run_stage.py or a tool as the workflow runs them: python3, YADE imported as a library."""
-    env = dict(os.environ, OMP_NUM_THREADS="1")
-    return subprocess.run(["python3", str(script), *map(str, args)], capture_output=True, text=True,
-                          cwd=cwd, timeout=timeout, env=env)
 
 
 def write(tmp_path, sc, name="scene.json"):

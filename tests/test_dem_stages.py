@@ -4,69 +4,23 @@ reproducibility and kill-and-resume.
 The cell: H = 8d, W = 4H (about 210 disks), kappa = 1e3, I = 1e-2. One module
 fixture runs pack -> preshear -> heaviside, sinusoidal once (about a minute).
 """
-import copy
 import json
-import os
 import shutil
-import signal
-import subprocess
-import time
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 from dem_contract import fabric_angle_deg, fabric_norm
+from tests.helpers import (RUN, assert_pack_restored_the_grains_own_friction_and_damping,
+                           assert_resumed_without_gap_or_duplicate, kill_preshear_after_first_checkpoint,
+                           make_scene, read, run_all_stages, yade)
 
-ROOT = Path(__file__).resolve().parents[1]
-YS = ROOT / "yade_scripts"
-RUN = YS / "run_stage.py"
 COLUMNS = ["t", "strain", "gammadot", "U_top", "U_bottom", "gap", "A_xx", "A_xy", "n_contacts", "sigma_xy",
            "p", "mu", "sigma_xy_bulk", "p_bulk", "phi", "Z", "inertial_number"]
 
 
-def make_scene(example="tiny.json"):
-    """A tiny example scene of yade_scripts/examples/ with short stages (a few seconds each)."""
-    sc = json.loads((YS / "examples" / example).read_text())
-    # the pack's defaults, but a lower compaction friction, so that its restore is tested
-    sc["pack"].update(initial_solid_fraction=0.55, ke_max=1e-6, friction=0.2)
-    sc["preshear"]["strain"] = 1.2
-    sc["heaviside"]["strain"] = 0.4
-    sc["sinusoidal"].update(strain=0.3, transition_strain=0.1)
-    sc["run"].update(checkpoint_every_s=1000, progress_every_s=5)
-    return sc
-
-
-def command(script, *args):
-    """The command line of a script: run_stage.py as the workflow runs it (python3, YADE imported
-    as a library, no remote servers), any other script (an inspection) under the yade launcher."""
-    if Path(script).name == "run_stage.py":
-        return ["python3", str(script), *map(str, args)]
-    return ["yade", "-n", "-x", str(script), *map(str, args)]
-
-
-def yade(*args, timeout=600):
-    env = dict(os.environ, OMP_NUM_THREADS="1")
-    return subprocess.run(command(*args), capture_output=True, text=True, timeout=timeout, env=env)
-
-
-def read(path):
-    return np.genfromtxt(path, delimiter=",", names=True)
-
-
 def fabric(a, b):
     return fabric_norm(a, b), fabric_angle_deg(a, b)
-
-
-def run_all_stages(root, sc):
-    """Write the scene ``sc`` under ``root`` and run pack, preshear, heaviside, sinusoidal in ``root/case``."""
-    scene = root / "scene.json"
-    scene.write_text(json.dumps(sc))
-    cdir = root / "case"
-    for stage in ("pack", "preshear", "heaviside", "sinusoidal"):
-        r = yade(RUN, scene, stage, cdir)
-        assert r.returncode == 0, f"{stage}: {r.stdout[-2000:]}\n{r.stderr[-2000:]}"
-    return dict(dir=cdir, scene=scene, root=root)
 
 
 @pytest.fixture(scope="module")
@@ -177,44 +131,6 @@ def test_sinusoidal_wall_speed_follows_half_cosine(case):
     assert np.allclose(r["U_bottom"], -r["U_top"])
 
 
-INSPECT_PACKING = """
-import json, sys
-from yade.wrapper import NewtonIntegrator, Omega
-O = Omega()
-O.load(sys.argv[1])
-lay = json.loads(O.tags["ys_layout"])
-print("PACKING " + json.dumps(dict(
-    materials=[float(m.frictionAngle) for m in O.materials],
-    contacts=[float(i.phys.tangensOfFrictionAngle) for i in O.interactions if i.isReal],
-    damping=[float(e.damping) for e in O.engines if isinstance(e, NewtonIntegrator)],
-    wall_damped=[bool(O.bodies[lay["clump"]].state.isDamped)] if "clump" in lay else [])), flush=True)
-"""
-
-
-def saved_packing(tmp_path, state):
-    """Friction angles of the materials, friction coefficients of the contacts, the NewtonIntegrator's
-    damping and the top wall's State.isDamped in a saved state (read by YADE itself)."""
-    script = tmp_path / "inspect_packing.py"
-    script.write_text(INSPECT_PACKING)
-    r = yade(script, state)
-    assert r.returncode == 0, r.stderr[-2000:]
-    return json.loads(r.stdout.split("PACKING ", 1)[1].splitlines()[0])
-
-
-def assert_pack_restored_the_grains_own_friction_and_damping(case, tmp_path):
-    """The pack compacts with pack.friction and damps with pack.damping; the saved packing
-    has material.friction on every material and contact and effects.damping in the integrator."""
-    sc = json.loads(case["scene"].read_text())
-    mu, damping = sc["material"]["friction"], sc["effects"]["damping"]
-    assert sc["pack"]["friction"] < mu and sc["pack"].get("damping", 0.5) != damping  # else nothing is tested
-    got = saved_packing(tmp_path, case["dir"] / "pack.final.yade.gz")
-    assert len(got["contacts"]) > 100
-    assert np.allclose(np.tan(got["materials"]), mu, rtol=1e-12, atol=0)
-    assert np.allclose(got["contacts"], mu, rtol=1e-12, atol=0)
-    assert got["damping"] == [damping]
-    assert all(got["wall_damped"])
-
-
 def test_pack_restores_the_grains_friction_and_damping(case, tmp_path):
     assert_pack_restored_the_grains_own_friction_and_damping(case, tmp_path)
 
@@ -308,52 +224,6 @@ def test_guards_stop_the_run(case, tmp_path, guard, match):
     assert not (cdir / "preshear.csv").exists()  # no half outputs
 
 
-def kill_preshear_after_first_checkpoint(scene, cdir, stage="preshear", ready=None):
-    """Start the pre-shear (or ``stage``) of ``cdir``, SIGKILL it 0.7 s after its first checkpoint
-    (its first for which ``ready(resume.json's dict)`` is true, if given); return its PID."""
-    resume = Path(cdir) / ".partial" / stage / "resume.json"
-    env = dict(os.environ, OMP_NUM_THREADS="1")
-    proc = subprocess.Popen(command(RUN, scene, stage, cdir),
-                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
-
-    def checkpointed():
-        if not resume.exists():
-            return False
-        try:
-            return ready is None or ready(json.loads(resume.read_text()))
-        except json.JSONDecodeError:
-            return False
-
-    try:
-        t0 = time.time()
-        while not checkpointed():
-            assert proc.poll() is None, "the stage ended before its first checkpoint"
-            assert time.time() - t0 < 120
-            time.sleep(0.1)
-        time.sleep(0.7)  # rows past the checkpoint get written, then are lost with the kill
-        assert proc.poll() is None, "the stage ended before it could be killed"
-        proc.send_signal(signal.SIGKILL)
-        proc.wait()
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-    return proc.pid
-
-
-def assert_resumed_without_gap_or_duplicate(cdir):
-    """The resumed pre-shear of ``cdir``: flagged resumed, t and strain strictly increasing (no duplicate,
-    no reordering), no step between rows longer than the coarse sampling interval (no gap).
-    Returns its series and sidecar."""
-    side = json.loads((cdir / "preshear.json").read_text())
-    assert side["resumed"] == 1
-    s = read(cdir / "preshear.csv")
-    t, strain = s["t"], s["strain"]
-    assert np.all(np.diff(t) > 0) and np.all(np.diff(strain) > 0)  # no duplicate, no reordering
-    dt_coarse = side["sampling_steps"]["coarse"] * side["dt"] / side["time_unit_s"]
-    assert np.diff(t).max() <= dt_coarse * (1 + 1e-9)  # no gap: not even one step more than the grid
-    return s, side
-
-
 def test_killed_stage_resumes_without_gap_or_duplicate_to_the_same_bit(case, tmp_path):
     """SIGKILL after the first checkpoint, then a rerun: the series is the uninterrupted run's,
     byte for byte (every run reloads its state where checkpoints are taken: checkpoint.py)."""
@@ -368,6 +238,6 @@ def test_killed_stage_resumes_without_gap_or_duplicate_to_the_same_bit(case, tmp
     assert "resumed from" in r.stdout
     assert f"stale lock of PID {pid} on host" in r.stdout  # SIGKILL left the lock file behind
     s, side = assert_resumed_without_gap_or_duplicate(cdir)
-    t, strain = s["t"], s["strain"]
+    strain = s["strain"]
     assert strain[-1] == pytest.approx(2.5, rel=0.05)
     assert (cdir / "preshear.csv").read_bytes() == (ref_dir / "preshear.csv").read_bytes()

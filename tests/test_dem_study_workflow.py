@@ -1,37 +1,20 @@
 """The DEM resolution study in the workflow: planned with accuracy.dem_study on, absent with it off,
 and the schema stops a bad study value before any job."""
 import shutil
-import subprocess
-import sys
-from pathlib import Path
 
 import pandas as pd
 import pytest
 import yaml
 
-ROOT = Path(__file__).resolve().parents[1]
+from tests.helpers import ROOT, counts, dry_run, snakemake
 
 
-def dry_run(*args):
-    return subprocess.run([sys.executable, "-m", "snakemake", "-n", "--quiet", "rules", *args],
-                          cwd=ROOT, capture_output=True, text=True, timeout=300)
-
-
-def counts(stdout):
-    out = {}
-    for line in stdout.splitlines():
-        parts = line.split()
-        if len(parts) == 2 and parts[1].isdigit():
-            out[parts[0]] = int(parts[1])
-    return out
-
-
-def test_paper_preset_plans_the_study_once_per_point():
+def test_paper_preset_plans_the_study_once_per_point(workflow_dir):
     from dem_study import grid
     config = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
     assert config["accuracy"]["dem_study"] is True
     n = len(grid.unique_points(grid.expand(config["accuracy"])))
-    result = dry_run("--configfile", "config/config.yaml", "--forceall")
+    result = dry_run("--configfile", "config/config.yaml", cwd=workflow_dir)
     assert result.returncode == 0, result.stderr[-3000:]
     c = counts(result.stdout)
     assert c["dem_study"] == 1
@@ -40,20 +23,20 @@ def test_paper_preset_plans_the_study_once_per_point():
 
 
 @pytest.mark.parametrize("preset", ["quick", "ci"])
-def test_small_presets_do_not_plan_the_study(preset):
+def test_small_presets_do_not_plan_the_study(preset, workflow_dir):
     config = yaml.safe_load((ROOT / "config" / f"{preset}.yaml").read_text())
     assert not config.get("accuracy", {}).get("dem_study", False)
-    result = dry_run("--configfile", f"config/{preset}.yaml", "--forceall")
+    result = dry_run("--configfile", f"config/{preset}.yaml", cwd=workflow_dir)
     assert result.returncode == 0, result.stderr[-3000:]
     assert not any(rule.startswith("dem_study") for rule in counts(result.stdout))
 
 
-def test_bad_study_value_stops_before_any_job(tmp_path):
+def test_bad_study_value_stops_before_any_job(tmp_path, workflow_dir):
     config = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
     config["accuracy"]["dem_grid"]["dt_over_tc"] = [0.5, 0.1]
     path = tmp_path / "config.yaml"
     path.write_text(yaml.safe_dump(config))
-    result = dry_run("--configfile", str(path))
+    result = dry_run("--configfile", path, cwd=workflow_dir)
     message = result.stdout + result.stderr
     assert result.returncode != 0
     assert "dt_over_tc" in message and "maximum of 0.3" in message, message[-2000:]
@@ -62,7 +45,7 @@ def test_bad_study_value_stops_before_any_job(tmp_path):
 @pytest.mark.yade
 @pytest.mark.slow
 @pytest.mark.skipif(shutil.which("yade") is None, reason="needs YADE (Debian package yade)")
-def test_tiny_study_runs_end_to_end_through_snakemake(tmp_path):
+def test_tiny_study_runs_end_to_end_through_snakemake(tmp_path, workflow_dir):
     """Three real ~200-disk points (two seeds at the base, one other I): about a minute on one core."""
     config = yaml.safe_load((ROOT / "config" / "ci.yaml").read_text())
     config["results_dir"] = str(tmp_path / "results")
@@ -77,8 +60,7 @@ def test_tiny_study_runs_end_to_end_through_snakemake(tmp_path):
     path = tmp_path / "config.yaml"
     path.write_text(yaml.safe_dump(config))
     target = f"{config['results_dir']}/accuracy/dem_cost.csv"
-    result = subprocess.run([sys.executable, "-m", "snakemake", "-j1", target, "--configfile", str(path)],
-                            cwd=ROOT, capture_output=True, text=True, timeout=900)
+    result = snakemake("-j1", target, "--configfile", path, cwd=workflow_dir, timeout=900)
     assert result.returncode == 0, result.stderr[-3000:]
     cost = pd.read_csv(target)
     assert set(cost["axis"]) == {"inertial_number", "seed"}

@@ -1,4 +1,4 @@
-"""The READMEs' model examples run as written, so the READMEs cannot drift from the code.
+"""The READMEs' examples run as written, so the READMEs cannot drift from the code.
 
 Every fenced ``python`` block of README.md and model/README.md that imports ``model``
 runs as a script, and every line of a fenced ``bash`` block that calls
@@ -7,9 +7,16 @@ on PATH is this interpreter, the repository on PYTHONPATH). The input files the
 examples name (a calibration's ``params.yaml``, ``P.yaml``, ``dem_run.csv``) are
 written there first; an example that names a new input fails until it is added to
 ``INPUTS``.
+
+Every other command line of README.md's fenced ``bash`` blocks (``make``, Snakemake,
+``python -m campaign``...) runs in a private working copy of the workflow and must exit 0:
+as written when it takes under a minute, as a dry run when it would run a campaign
+(``make -n <target>``; ``snakemake -n ...``; a ``--report`` needs a finished run, so its
+command is dry-run without it).
 """
 import os
 import re
+import shlex
 import subprocess
 import sys
 from pathlib import Path
@@ -109,3 +116,50 @@ def test_readme_example_runs_as_written(where, kind, code, workdir):
     if re.search(r"python -m model defaults\b", code):
         (cwd / "printed.yaml").write_text(run.stdout)
         assert load_params(cwd / "printed.yaml") == default_params()
+
+
+# --- README.md's shell commands ----------------------------------------------------------------
+
+def readme_commands(readme="README.md"):
+    """(id, command) for every command line of README.md's fenced bash blocks but the model's examples."""
+    text = (ROOT / readme).read_text()
+    found = []
+    for block in FENCE.finditer(text):
+        if block.group(1) != "bash":
+            continue
+        first = text.count("\n", 0, block.start()) + 2
+        for k, line in enumerate(block.group(2).splitlines()):
+            if line.strip() and not line.lstrip().startswith("#") and not CALLS_MODEL.match(line):
+                found.append((f"{readme}:{first + k}", line))
+    return found
+
+
+COMMANDS = readme_commands()
+
+
+def as_run(line):
+    """The argument list that checks README command ``line``: a dry run for what runs a campaign."""
+    words = shlex.split(line, comments=True)
+    if words[0] == "make":                           # every target installs or runs a campaign
+        return ["make", "-n", *words[1:]]
+    if words[0].endswith("snakemake") and "--unlock" not in words:
+        if "--report" in words:                      # needs a finished run: check the rest of the line
+            at = words.index("--report")
+            del words[at:at + 2]
+        return [words[0], "-n", *words[1:]]
+    return words
+
+
+def test_the_readme_shows_the_set_up_the_presets_and_the_cluster():
+    """Guards the extraction: the commands a new user copies are all fenced, so all of them are run."""
+    lines = [line for _, line in COMMANDS]
+    for expected in ("make quick", "make test", "--configfile config/quick.yaml", "--profile profiles/slurm",
+                     "python -m campaign check", "--report", "results/claims/README_section.md"):
+        assert any(expected in line for line in lines), expected
+
+
+@pytest.mark.parametrize("where, line", COMMANDS, ids=[c[0] for c in COMMANDS])
+def test_readme_command_exits_0(where, line, workflow_dir):
+    run = subprocess.run(as_run(line), cwd=workflow_dir, capture_output=True, text=True, timeout=300,
+                         env=dict(os.environ, MPLBACKEND="Agg"))
+    assert run.returncode == 0, f"{where}: {line}\n{run.stdout[-2000:]}\n{run.stderr[-3000:]}"

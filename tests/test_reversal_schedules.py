@@ -7,8 +7,6 @@ into one transient per reversal (dem_contract.split_transients).
 import copy
 import json
 import shutil
-import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -19,11 +17,9 @@ from campaign.scene_spec import protocol_strain
 from dem_contract import (DEMInputError, pre_reversal_state, read_series, read_sidecar, split_transients,
                           synthetic)
 from model import default_params
-from tests.test_dem_stages import RUN, kill_preshear_after_first_checkpoint, make_scene, read, yade
+from tests.helpers import ROOT, RUN, kill_preshear_after_first_checkpoint, make_scene, read, yade, yade_module
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "yade_scripts"))
-import scene as scenemod  # noqa: E402  (pure Python, no YADE)
+scenemod = yade_module("scene")  # pure Python, no YADE
 
 TINY = json.loads((ROOT / "yade_scripts" / "examples" / "tiny.json").read_text())
 CI = yaml.safe_load((ROOT / "config" / "ci.yaml").read_text())

@@ -8,26 +8,21 @@ one-node Slurm (workflow/scripts/slurm_local.sh) and is opt-in: marker
 """
 import os
 import re
-import shutil
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
-SNAKEMAKE = [sys.executable, "-m", "snakemake"]
+from tests.helpers import ROOT, SNAKEMAKE, dry_run, workflow_copy
+
 README_ARGS = ["--default-resources", "slurm_account=ACCOUNT", "slurm_partition=PARTITION"]
 LOCAL_RULES = {"all", "scene", "dem_study_scene", "dem_study_points"}
 
 
-def planned_resources(*args):
-    """rule -> list of resource dicts, one per planned job, from a dry run."""
-    result = subprocess.run(
-        [*SNAKEMAKE, "-n", "--profile", "profiles/slurm", "--forceall", *args],
-        cwd=ROOT, capture_output=True, text=True, timeout=300,
-    )
+def planned_resources(workdir, *args):
+    """rule -> list of resource dicts, one per planned job, from a dry run in the working copy ``workdir``."""
+    result = dry_run("--profile", "profiles/slurm", *args, cwd=workdir, quiet=False)
     assert result.returncode == 0, result.stderr[-3000:]
     jobs, rule = {}, None
     for line in (result.stdout + result.stderr).splitlines():
@@ -40,8 +35,8 @@ def planned_resources(*args):
 
 
 @pytest.mark.parametrize("extra", [[], README_ARGS], ids=["profile", "readme-command"])
-def test_every_cluster_job_gets_a_runtime_and_memory(extra):
-    jobs = planned_resources(*extra)
+def test_every_cluster_job_gets_a_runtime_and_memory(extra, workflow_dir):
+    jobs = planned_resources(workflow_dir, *extra)
     assert "dem_preshear" in jobs and "dem_study_preshear" in jobs, sorted(jobs)
     for rule, planned in jobs.items():
         if rule in LOCAL_RULES:
@@ -52,8 +47,8 @@ def test_every_cluster_job_gets_a_runtime_and_memory(extra):
         assert all(res["slurm_account"] == "ACCOUNT" for res in jobs["dem_preshear"])
 
 
-def test_dem_runtime_follows_the_scene_not_a_flat_default():
-    jobs = planned_resources()
+def test_dem_runtime_follows_the_scene_not_a_flat_default(workflow_dir):
+    jobs = planned_resources(workflow_dir)
     preshear = [int(res["runtime"]) for res in jobs["dem_preshear"]]
     # the paper cell: about 5,000 disks, 2.1 h per unit strain, a 2-strain pre-shear: 4 h x 3
     assert min(preshear) > 8 * 60, preshear
@@ -65,6 +60,7 @@ RUN_SLURM = os.environ.get("RUN_SLURM") == "1"
 
 
 @pytest.mark.slurm
+@pytest.mark.serial  # a Slurm daemon on this machine
 @pytest.mark.skipif(not RUN_SLURM, reason="opt-in: RUN_SLURM=1 (root; installs and starts a local Slurm)")
 def test_ci_preset_runs_through_a_local_slurm(tmp_path):
     script = ROOT / "workflow/scripts/slurm_local.sh"
@@ -73,16 +69,17 @@ def test_ci_preset_runs_through_a_local_slurm(tmp_path):
     if not was_up:
         subprocess.run([script, "up"], check=True, timeout=900)
     results = tmp_path / "results"
+    workdir = workflow_copy(tmp_path / "workflow")  # its .snakemake/ (and slurm_logs/) its own
     smk = [*SNAKEMAKE, "--configfile", "config/ci.yaml", "--config", f"results_dir={results}"]
     try:
         t0 = time.monotonic()
         run = subprocess.run([*smk, "--profile", "profiles/slurm", "--slurm-logdir", str(tmp_path / "slurm")],
-                             cwd=ROOT, capture_output=True, text=True, timeout=3600)
+                             cwd=workdir, capture_output=True, text=True, timeout=3600)
         wall = time.monotonic() - t0
         assert run.returncode == 0, run.stderr[-4000:]
         print(f"CI preset through the local Slurm: {wall:.0f} s")
-        subprocess.run([*smk, "--report", str(results / "report.html")], cwd=ROOT, check=True, timeout=600)
-        summary = subprocess.run([*smk, "--summary"], cwd=ROOT, capture_output=True, text=True, check=True)
+        subprocess.run([*smk, "--report", str(results / "report.html")], cwd=workdir, check=True, timeout=600)
+        summary = subprocess.run([*smk, "--summary"], cwd=workdir, capture_output=True, text=True, check=True)
         (results / "summary.tsv").write_text(summary.stdout)
         check = subprocess.run(
             [sys.executable, "workflow/scripts/check_outputs.py", results / "summary.tsv",
@@ -92,4 +89,3 @@ def test_ci_preset_runs_through_a_local_slurm(tmp_path):
     finally:
         if not was_up:
             subprocess.run([script, "down"], check=False)
-        shutil.rmtree(ROOT / ".snakemake" / "slurm_logs", ignore_errors=True)

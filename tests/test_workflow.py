@@ -3,22 +3,11 @@
 These run Snakemake itself (dry runs: no job executes).
 """
 import shutil
-import subprocess
-import sys
-from pathlib import Path
 
 import pytest
 import yaml
 
-ROOT = Path(__file__).resolve().parents[1]
-SNAKEMAKE = [sys.executable, "-m", "snakemake"]
-
-
-def dry_run(*args, cwd=ROOT):
-    return subprocess.run(
-        [*SNAKEMAKE, "-n", "--quiet", "rules", *args],
-        cwd=cwd, capture_output=True, text=True, timeout=300,
-    )
+from tests.helpers import ROOT, counts, dry_run, yade_module
 
 
 def write_config(tmp_path, preset, **changes):
@@ -35,9 +24,8 @@ def write_config(tmp_path, preset, **changes):
 
 
 @pytest.mark.parametrize("preset", ["config", "quick", "ci"])
-def test_every_preset_builds_a_dag(preset):
-    # --forceall: plan every job even where a user's results/ already holds them
-    result = dry_run("--configfile", f"config/{preset}.yaml", "--forceall")
+def test_every_preset_builds_a_dag(preset, workflow_dir):
+    result = dry_run("--configfile", f"config/{preset}.yaml", cwd=workflow_dir)
     assert result.returncode == 0, result.stderr[-3000:]
     assert "dem_preshear" in result.stdout
 
@@ -51,44 +39,34 @@ def test_every_preset_builds_a_dag(preset):
         ({"timestep": {"dt_over_tc": 0.9}}, "dt_over_tc", "maximum of 0.3"),
     ],
 )
-def test_bad_config_value_stops_before_any_job_naming_key_and_range(tmp_path, changes, key, allowed):
+def test_bad_config_value_stops_before_any_job_naming_key_and_range(tmp_path, workflow_dir, changes, key, allowed):
     config = write_config(tmp_path, "ci", **changes)
-    result = dry_run("--configfile", str(config))
+    result = dry_run("--configfile", config, cwd=workflow_dir)
     message = result.stdout + result.stderr  # Snakemake prints the error on stdout
     assert result.returncode != 0
     assert key in message and allowed in message, message[-2000:]
 
 
-def test_unknown_config_key_is_rejected(tmp_path):
+def test_unknown_config_key_is_rejected(tmp_path, workflow_dir):
     config = write_config(tmp_path, "ci", cel={"H_over_d": 8})
-    result = dry_run("--configfile", str(config))
+    result = dry_run("--configfile", config, cwd=workflow_dir)
     assert result.returncode != 0
     assert "'cel'" in result.stdout + result.stderr
 
 
-def test_one_preshear_feeds_every_reversal():
-    result = subprocess.run(
-        [*SNAKEMAKE, "-n", "--configfile", "config/ci.yaml", "--forceall"],
-        cwd=ROOT, capture_output=True, text=True, timeout=300,
-    )
+def test_one_preshear_feeds_every_reversal(workflow_dir):
+    result = dry_run("--configfile", "config/ci.yaml", cwd=workflow_dir, quiet=False)
     assert result.returncode == 0, result.stderr[-3000:]
     ci = yaml.safe_load((ROOT / "config" / "ci.yaml").read_text())
     n_cases = len(ci["seeds"]) * len(ci["loading"]["pressures"]) * len(ci["loading"]["inertial_numbers"])
-    counts = {}
-    for line in result.stdout.splitlines():
-        parts = line.split()
-        if len(parts) == 2 and parts[1].isdigit():
-            counts[parts[0]] = int(parts[1])
-    assert counts["dem_preshear"] == n_cases
-    assert counts["dem_reversal"] == n_cases * len(ci["protocols"])
+    jobs = counts(result.stdout)
+    assert jobs["dem_preshear"] == n_cases
+    assert jobs["dem_reversal"] == n_cases * len(ci["protocols"])
 
 
 @pytest.mark.skipif(shutil.which("sbatch") is not None, reason="a real cluster: do not touch it from tests")
-def test_slurm_profile_plans_the_paper_campaign():
-    result = subprocess.run(
-        [*SNAKEMAKE, "-n", "--profile", "profiles/slurm", "--forceall"],
-        cwd=ROOT, capture_output=True, text=True, timeout=300,
-    )
+def test_slurm_profile_plans_the_paper_campaign(workflow_dir):
+    result = dry_run("--profile", "profiles/slurm", cwd=workflow_dir, quiet=False)
     assert result.returncode == 0, result.stderr[-3000:]
     assert "dem_preshear" in result.stdout
 
@@ -99,11 +77,7 @@ SCENE_SECTION = {"cell": "geometry"}
 
 def test_config_schema_ranges_match_the_scene_validator():
     """The pipeline's schema and yade_scripts' own validator must accept the same values."""
-    sys.path.insert(0, str(ROOT / "yade_scripts"))
-    try:
-        from scene import SPEC
-    finally:
-        sys.path.pop(0)
+    SPEC = yade_module("scene").SPEC
     schema = yaml.safe_load((ROOT / "workflow/schemas/config.schema.yaml").read_text())
     compared = 0
     for section, block in schema["properties"].items():
@@ -122,7 +96,7 @@ def test_config_schema_ranges_match_the_scene_validator():
     assert compared >= 20
 
 
-def test_every_rule_has_a_log_and_a_benchmark_and_the_study_reuses_the_dem_rules():
+def test_every_rule_has_a_log_and_a_benchmark_and_the_study_reuses_the_dem_rules(workflow_dir):
     """Every rule that runs a job (all but the target rule `all`) keeps its log and its benchmark;
     the DEM study's stages are the campaign's rules (one YADE command, in dem.smk)."""
     from snakemake.api import SnakemakeApi
@@ -132,7 +106,7 @@ def test_every_rule_has_a_log_and_a_benchmark_and_the_study_reuses_the_dem_rules
         workflow = api.workflow(
             resource_settings=ResourceSettings(), storage_settings=StorageSettings(),
             config_settings=ConfigSettings(configfiles=[ROOT / "config" / "config.yaml"]),  # every rule in use
-            snakefile=ROOT / "Snakefile", workdir=ROOT)
+            snakefile=workflow_dir / "Snakefile", workdir=workflow_dir)
         rules = {rule.name: rule for rule in workflow._workflow.rules}
     assert {"scene", "dem_pack", "calibrate", "compare_predict", "dem_study_pack"} <= set(rules)
     missing = [name for name, rule in rules.items() if name != "all" and not (rule.log and rule.benchmark)]

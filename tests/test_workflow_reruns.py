@@ -7,17 +7,13 @@ rerun.
 """
 import copy
 import shutil
-import subprocess
-import sys
-from pathlib import Path
 
 import pytest
 import yaml
 
-from tests.test_dem_study_workflow import counts as job_counts
+from tests.helpers import counts as job_counts
+from tests.helpers import dry_run, snakemake, workflow_copy
 
-ROOT = Path(__file__).resolve().parents[1]
-SNAKEMAKE = [sys.executable, "-m", "snakemake"]
 DEM_RULES = {"scene", "dem_pack", "dem_preshear", "dem_reversal"}
 
 TINY = {
@@ -49,15 +45,16 @@ def write(config, path):
 
 @pytest.fixture(scope="module")
 def finished(tmp_path_factory):
-    """The tiny campaign's DEM, run to the end; returns (config, its folder, DEM targets)."""
+    """The tiny campaign's DEM, run to the end in a working copy of its own (whose .snakemake/ keeps
+    the metadata the reruns are decided on); returns (config, its folder, DEM targets)."""
     if shutil.which("yade") is None:
         pytest.skip("needs YADE (Debian package yade)")
     tmp = tmp_path_factory.mktemp("reruns")
     config = copy.deepcopy(TINY)
     config["results_dir"] = str(tmp / "results")
     targets = [f"{config['results_dir']}/dem/{case}/heaviside.csv" for case in CASES]
-    result = subprocess.run([*SNAKEMAKE, "-j1", *targets, "--configfile", str(write(config, tmp / "config.yaml"))],
-                            cwd=ROOT, capture_output=True, text=True, timeout=600)
+    result = snakemake("-j1", *targets, "--configfile", write(config, tmp / "config.yaml"),
+                       cwd=workflow_copy(tmp / "workflow"), timeout=600)
     assert result.returncode == 0, result.stderr[-3000:]
     return config, tmp, targets
 
@@ -68,8 +65,7 @@ def planned(finished, edit, name, all_targets=False):
     changed = copy.deepcopy(config)
     edit(changed)
     path = write(changed, tmp / f"{name}.yaml")
-    result = subprocess.run([*SNAKEMAKE, "-n", *([] if all_targets else targets), "--configfile", str(path),
-                             "--quiet", "rules"], cwd=ROOT, capture_output=True, text=True, timeout=300)
+    result = dry_run(*([] if all_targets else targets), "--configfile", path, cwd=tmp / "workflow")
     assert result.returncode == 0, result.stdout[-2000:] + result.stderr[-2000:]
     return job_counts(result.stdout)
 
@@ -102,3 +98,15 @@ def test_edit_outside_the_dem_reruns_no_dem_job(finished, name, edit):
     counts = planned(finished, edit, name, all_targets=True)
     assert "calibrate" in counts  # the dry run does plan the stages after the DEM
     assert not DEM_RULES & set(counts), counts
+
+
+# --------------------------------------------------------------------------- more seeds reuse the finished ones
+
+@pytest.mark.yade
+@pytest.mark.slow
+def test_extending_seeds_plans_only_the_new_seeds_dem(finished):
+    if shutil.which("yade") is None:
+        pytest.skip("needs YADE (Debian package yade)")
+    counts = planned(finished, lambda c: c.update(seeds=[*c["seeds"], 3]), "one_more_seed", all_targets=True)
+    assert {rule: counts.get(rule) for rule in DEM_RULES} == {rule: 1 for rule in DEM_RULES}, counts
+    assert counts.get("claims_plan") == 1 and counts.get("claims") == 1

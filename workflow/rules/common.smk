@@ -34,4 +34,5 @@ def campaign_series(wildcards=None):
 def all_targets():
     targets = dem_outputs() + [f"{RESULTS}/dem/campaign_summary.csv"]
     targets += calibration_targets() + compare_targets() + claims_targets() + accuracy_targets()
+    targets += report_table_targets()  # report.smk: the verdict tables as HTML for the report
     return targets

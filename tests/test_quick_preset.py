@@ -1,0 +1,61 @@
+"""The quick preset runs the study, not benchmarks of the code's own speed; `make bench` runs those.
+
+A benchmark of the code is a rule whose command runs a ``*benchmark*`` module (the batched
+integrator against a loop, every calibration set with two integrators): it measures the code,
+not the physics. The quick preset's dry run (in a working copy of its own) must plan none of
+them and every part of the study; the Makefile's ``bench`` command must plan all of them.
+"""
+import re
+import shlex
+
+import pytest
+
+from tests.helpers import ROOT, counts, dry_run
+
+#: Rules of the study the quick preset must keep (DEM, calibration, comparison, claims, and
+#: what accuracy costs in the study itself: the ODE work-precision and the packing's share).
+STUDY = {"dem_pack", "dem_preshear", "dem_reversal", "calibrate", "compare_predict", "claims",
+         "ode_work_precision", "packing_cost", "claims_table_html", "packing_table_html", "calibration_tables_html"}
+
+
+@pytest.fixture(scope="module")
+def code_benchmarks(module_workflow_dir):
+    """Rule names whose shell command runs a module named ``*benchmark*``."""
+    from snakemake.api import SnakemakeApi
+    from snakemake.settings.types import ConfigSettings, OutputSettings, ResourceSettings, StorageSettings
+
+    with SnakemakeApi(OutputSettings()) as api:
+        workflow = api.workflow(
+            resource_settings=ResourceSettings(), storage_settings=StorageSettings(),
+            config_settings=ConfigSettings(configfiles=[module_workflow_dir / "config" / "quick.yaml"]),
+            snakefile=module_workflow_dir / "Snakefile", workdir=module_workflow_dir)
+        names = {rule.name for rule in workflow._workflow.rules
+                 if rule.shellcmd and re.search(r"-m \w+(\.\w+)*benchmark\b", rule.shellcmd)}
+    assert {"batched_cost", "calibration_cost"} <= names, names  # else the definition found nothing
+    return names
+
+
+def bench_command():
+    """The arguments of the Makefile's `bench` recipe after `snakemake`, its variables expanded."""
+    text = (ROOT / "Makefile").read_text()
+    variables = dict(re.findall(r"^(\w+)\s*:=\s*(.*)$", text, re.M))
+    recipe = re.search(r"^bench:.*\n\t(.*)$", text, re.M).group(1)
+    recipe = re.sub(r"\$\((\w+)\)", lambda m: variables[m.group(1)], recipe)
+    words = shlex.split(recipe)
+    return words[words.index(next(w for w in words if w.endswith("snakemake"))) + 1:]
+
+
+def test_the_quick_preset_plans_the_study_and_no_benchmark_of_the_code(code_benchmarks, workflow_dir):
+    result = dry_run("--configfile", "config/quick.yaml", cwd=workflow_dir)
+    assert result.returncode == 0, result.stderr[-3000:]
+    jobs = counts(result.stdout)
+    assert not code_benchmarks & set(jobs), sorted(code_benchmarks & set(jobs))
+    assert STUDY <= set(jobs), sorted(STUDY - set(jobs))
+
+
+def test_make_bench_plans_every_benchmark_of_the_code(code_benchmarks, workflow_dir):
+    args = bench_command()
+    assert "config/quick.yaml" in args
+    result = dry_run(*[a for a in args if a != "-j2"], cwd=workflow_dir)
+    assert result.returncode == 0, result.stderr[-3000:]
+    assert code_benchmarks <= set(counts(result.stdout)), counts(result.stdout)
