@@ -9,7 +9,7 @@ written there first; an example that names a new input fails until it is added t
 ``INPUTS``.
 
 Every other command line of README.md's fenced ``bash`` blocks (``make``, Snakemake,
-``python -m campaign``...) runs in a private working copy of the workflow and must exit 0:
+``python -m preflight``...) runs in a private working copy of the workflow and must exit 0:
 as written when it takes under a minute, as a dry run when it would run a campaign
 (``make -n <target>``; ``snakemake -n ...``; a ``--report`` needs a finished run, so its
 command is dry-run without it).
@@ -154,7 +154,7 @@ def test_the_readme_shows_the_set_up_the_presets_and_the_cluster():
     """Guards the extraction: the commands a new user copies are all fenced, so all of them are run."""
     lines = [line for _, line in COMMANDS]
     for expected in ("make quick", "make test", "--configfile config/quick.yaml", "--profile profiles/slurm",
-                     "python -m campaign check", "--report", "results/claims/README_section.md"):
+                     "python -m preflight check", "--report", "results/claims/README_section.md"):
         assert any(expected in line for line in lines), expected
 
 
