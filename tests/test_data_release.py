@@ -22,7 +22,9 @@ import pandas as pd
 import pytest
 import yaml
 
-from dem_contract import release
+from dem_contract import DEMInputError, read_series, release, synthetic
+from dem_contract.importer import import_cases
+from model import default_params
 
 ROOT = Path(__file__).resolve().parents[1]
 SNAKEMAKE = [sys.executable, "-m", "snakemake"]
@@ -90,6 +92,44 @@ def test_committed_releases_fit_the_size_budget():
     if not COMMITTED:
         pytest.skip("no release committed under data/")
     assert release.release_bytes(ROOT / "data") <= 20e6
+
+
+def gzip_run(tmp_path):
+    """A model-made case's pre-shear and Heaviside run as one minimal CSV, gzip-compressed (as in a release)."""
+    case = synthetic.write_case(tmp_path / "made", default_params(), seed=1, preshear_strain=2.0,
+                                protocols=("heaviside",))
+    pre = pd.read_csv(case / "preshear.csv")
+    whole = pd.concat([pre, pd.read_csv(case / "heaviside.csv").iloc[1:]], ignore_index=True)
+    release.write_csv_gz(whole, tmp_path / "run.csv.gz")
+    return pre
+
+
+def case_yaml(tmp_path, reversal):
+    meta = {"pressure": 1.0e5, "inertial_number": 1.0e-3, "cases": [
+        {"seed": 1, "runs": [{"file": "run.csv.gz", "protocol": "heaviside", "reversals": [reversal]}]}]}
+    return write(meta, tmp_path / "case.yaml")
+
+
+def test_importer_reads_a_gzip_run_and_takes_the_reversal_row_named_by_its_time(tmp_path):
+    """With ``t``, the row at that time starts the reversal, whatever ``strain`` says (here 0.1 short of it)."""
+    pre = gzip_run(tmp_path)
+    (case,) = import_cases(case_yaml(tmp_path, {"strain": 1.9, "t": float(pre["t"].iloc[-1])}), tmp_path / "dem")
+    imported = read_series(case / "preshear.csv")
+    assert len(imported) == len(pre) and imported["t"].iloc[-1] == pre["t"].iloc[-1]
+    side = yaml.safe_load((case / "heaviside.json").read_text())
+    assert side["reversal_strain"] == pytest.approx(2.0)
+    (short,) = import_cases(case_yaml(tmp_path, {"strain": 1.9}), tmp_path / "dem-by-strain")
+    assert read_series(short / "preshear.csv")["strain"].iloc[-1] == pytest.approx(1.9, abs=0.01)
+
+
+def test_importer_names_a_reversal_time_with_no_row_and_a_truncated_gzip_file(tmp_path):
+    pre = gzip_run(tmp_path)
+    with pytest.raises(DEMInputError, match=r"run.csv.gz: reversal 1 at t 1999.5: no data row at that time"):
+        import_cases(case_yaml(tmp_path, {"strain": 2.0, "t": float(pre["t"].iloc[-1]) - 0.5}), tmp_path / "dem")
+    data = (tmp_path / "run.csv.gz").read_bytes()
+    (tmp_path / "run.csv.gz").write_bytes(data[: len(data) // 2])
+    with pytest.raises(DEMInputError, match=r"run.csv.gz: not a readable CSV"):
+        import_cases(case_yaml(tmp_path, {"strain": 2.0}), tmp_path / "dem")
 
 
 @pytest.mark.yade
