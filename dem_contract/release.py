@@ -45,6 +45,8 @@ CASES_DIR = "cases"
 STATE = "preshear.final.yade.gz"
 #: Stages whose sidecars every case has before its reversal runs.
 BASE_STAGES = ("pack", "preshear")
+#: The code a DEM result depends on (its last commit is named in the manifest).
+DEM_CODE = ("yade_scripts", "campaign/scenes.py", "campaign/scene_spec.py")
 #: Results sub-folders a released case can come from (the campaign's, the bulk study's).
 SOURCES = ("dem", "accuracy/bulk")
 
@@ -202,6 +204,8 @@ def make_release(case_dirs, out, config, command: str, with_states: bool = False
         "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
         "code_commit": _git("rev-parse", "HEAD", cwd=repo),
         "code_dirty": bool(_git("status", "--porcelain", "--untracked-files=no", cwd=repo)),
+        # the last commit that changed the DEM's code (the YADE scene and stages, the config -> scene mapping)
+        "dem_code_commit": _git("log", "-1", "--format=%H", "--", *DEM_CODE, cwd=repo),
         "yade_version": yade[0] if len(yade) == 1 else yade,
         "states": with_states,
         "regenerate": {
@@ -320,5 +324,5 @@ def case_files(release, label) -> list:
     return sorted(str(p) for p in (Path(release) / CASES_DIR / label).rglob("*") if p.is_file())
 
 
-__all__ = ["MANIFEST", "sha256", "write_csv_gz", "case_protocols", "make_release", "read_manifest",
+__all__ = ["DEMInputError", "MANIFEST", "sha256", "write_csv_gz", "case_protocols", "make_release", "read_manifest",
            "checksum_problems", "restore_case", "verify", "released_cases", "release_bytes", "case_files"]

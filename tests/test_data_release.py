@@ -140,7 +140,7 @@ def test_release_manifest_names_provenance_and_every_file(released):
     labels = [f"p100000_I0.01_s{seed}" for seed in SEEDS]
     assert sorted(manifest["cases"]) == labels
     assert manifest["config"] == yaml.safe_load(config.read_text())
-    assert manifest["yade_version"] == "2023.02a" and len(manifest["code_commit"]) == 40
+    assert manifest["yade_version"] == "2023.02a" and len(manifest["code_commit"]) == len(manifest["dem_code_commit"]) == 40
     assert "python -m dem_contract release --cases" in manifest["regenerate"]["release"]
     assert f"results_dir=<results_dir> <results_dir>/dem/{labels[0]}/heaviside.csv" in manifest["regenerate"]["dem"]
     for label in labels:
@@ -250,3 +250,10 @@ def test_released_case_dem_reruns_identically(released, tmp_path):
         pd.testing.assert_frame_equal(pd.read_csv(restored / f"{stem}.csv").astype(float),
                                       pd.read_csv(targets[0].parent / f"{stem}.csv").astype(float),
                                       check_exact=True)
+
+
+def test_a_missing_release_stops_the_workflow_naming_its_manifest(tmp_path):
+    config = write(campaign_config(tmp_path / "results", release=str(tmp_path / "nothere")), tmp_path / "config.yaml")
+    run = snakemake("-n", "--configfile", config, timeout=300)
+    assert run.returncode == 2
+    assert f"config key 'release': {tmp_path / 'nothere' / 'manifest.yaml'}: not readable" in run.stderr

@@ -22,9 +22,13 @@ def released_scene_matches(label, folder):
     return False
 
 
-RELEASED = {label: folder
-            for label, folder in dem_release.released_cases(config["release"], PROTOCOLS, workflow.basedir).items()
-            if label in CASES and released_scene_matches(label, folder)}
+try:
+    RELEASED = {label: folder
+                for label, folder in dem_release.released_cases(config["release"], PROTOCOLS, workflow.basedir).items()
+                if label in CASES and released_scene_matches(label, folder)}
+except (OSError, dem_release.DEMInputError) as exc:     # like the pre-flight check: exit 2 naming the file
+    print(f"config key 'release': {exc}", file=sys.stderr, flush=True)
+    sys.exit(2)
 
 if RELEASED:
 
