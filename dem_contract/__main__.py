@@ -31,7 +31,8 @@ def build_parser() -> argparse.ArgumentParser:
     rel = sub.add_parser("release", help="finished DEM cases -> a data release folder data/<name>/")
     rel.add_argument("--cases", nargs="+", required=True,
                      help="finished case folders: <results>/dem/<case> or <results>/accuracy/bulk/<cell>_s<seed>")
-    rel.add_argument("--config", required=True, help="the campaign's config file as run")
+    rel.add_argument("--config", required=True, nargs="+",
+                     help="the campaign's config file(s) as run, in the order of --configfile")
     rel.add_argument("--out", required=True, help="the release folder to write, e.g. data/<campaign>")
     rel.add_argument("--states", action="store_true", help="also release each case's preshear.final.yade.gz")
     ver = sub.add_parser("verify", help="check releases' checksums and read every released case back")
@@ -52,7 +53,7 @@ def run(args) -> int:
     elif args.command == "release":
         command = "python -m dem_contract release " + shlex.join(sys.argv[2:] if sys.argv[1:2] == ["release"]
                                                                  else ["--cases", *args.cases, "--config",
-                                                                       args.config, "--out", args.out]
+                                                                       *args.config, "--out", args.out]
                                                                  + (["--states"] if args.states else []))
         out = release.make_release(args.cases, args.out, args.config, command, args.states)
         manifest = release.read_manifest(out)

@@ -15,8 +15,9 @@ A release folder ``data/<name>/`` holds, per case ``cases/<label>/``:
 - ``preshear.final.yade.gz`` (optional): the pre-shear's final state, for new
   reversals branching from it;
 
-and ``config.yaml`` (the campaign config as run) and ``manifest.yaml`` (the
-config, the commit of the code, YADE's version, the date, a sha256 and a size
+and ``config.yaml`` (the campaign's config file as run; ``config-<k>.yaml``,
+k = 1, 2, ..., when it ran with several, in their order) and ``manifest.yaml``
+(the config, merged as Snakemake merges it, the commit of the code, YADE's version, the date, a sha256 and a size
 per file, the commands that regenerate the DEM and the release). Nothing in a
 release is edited by hand: ``verify`` refuses a file whose checksum differs.
 """
@@ -72,6 +73,15 @@ def case_protocols(case_dir) -> list:
     case_dir = Path(case_dir)
     return sorted(p.stem for p in case_dir.glob("*.csv")
                   if p.stem not in BASE_STAGES and p.with_suffix(".json").is_file())
+
+
+def merge_config(base: dict, overlay: dict) -> dict:
+    """``overlay`` over ``base``, mappings merged key by key (Snakemake's merge of several --configfile)."""
+    out = dict(base)
+    for key, value in overlay.items():
+        out[key] = merge_config(out[key], value) if isinstance(value, dict) and isinstance(out.get(key), dict) \
+            else value
+    return out
 
 
 def pre_tail_rows(n_pre: int, n_run: int) -> int:
@@ -166,8 +176,9 @@ def make_release(case_dirs, out, config, command: str, with_states: bool = False
         Finished cases: ``<results>/dem/<case>/`` or ``<results>/accuracy/bulk/<cell>_s<seed>/``.
     out : str or Path
         The release folder, e.g. ``data/<campaign>``.
-    config : str or Path
-        The campaign's config file as run (copied to ``config.yaml`` and into the manifest).
+    config : str or Path, or a sequence of them
+        The campaign's config file(s) as run, in the order given to ``--configfile``
+        (copied to ``config.yaml``, or ``config-1.yaml``, ``config-2.yaml``, ...; merged into the manifest).
     command : str
         The command line that made the release (named in the manifest).
     with_states : bool
@@ -180,13 +191,18 @@ def make_release(case_dirs, out, config, command: str, with_states: bool = False
     Path
         The release folder.
     """
-    out, config = Path(out), Path(config)
+    out = Path(out)
+    configs = [Path(config)] if isinstance(config, (str, Path)) else [Path(c) for c in config]
     repo = Path(repo) if repo else Path(__file__).resolve().parents[1]
     if out.exists() and any(out.iterdir()):
         raise DEMInputError(f"{out}: exists and is not empty; a release is written once (delete it to remake it)")
-    cfg = yaml.safe_load(config.read_text())
+    cfg = {}
+    for path in configs:
+        cfg = merge_config(cfg, yaml.safe_load(path.read_text()) or {})
     out.mkdir(parents=True, exist_ok=True)
-    shutil.copyfile(config, out / "config.yaml")
+    names = ["config.yaml"] if len(configs) == 1 else [f"config-{k}.yaml" for k in range(1, len(configs) + 1)]
+    for path, name in zip(configs, names):
+        shutil.copyfile(path, out / name)
     cases = {}
     for case_dir in map(Path, case_dirs):
         source = case_dir.parent.name if case_dir.parent.name == "dem" else "accuracy/bulk"
@@ -209,7 +225,8 @@ def make_release(case_dirs, out, config, command: str, with_states: bool = False
         "yade_version": yade[0] if len(yade) == 1 else yade,
         "states": with_states,
         "regenerate": {
-            "dem": f"snakemake -j2 --configfile {out}/config.yaml --config results_dir=<results_dir> {targets}",
+            "dem": f"snakemake -j2 --configfile {' '.join(f'{out}/{n}' for n in names)}"
+                   f" --config results_dir=<results_dir> {targets}",
             "release": command,
         },
         "cases": cases,

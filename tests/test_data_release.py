@@ -94,6 +94,14 @@ def test_committed_releases_fit_the_size_budget():
     assert release.release_bytes(ROOT / "data") <= 20e6
 
 
+def test_config_files_merge_as_snakemake_merges_them():
+    """A later --configfile's mapping updates the earlier one's key by key; other values are replaced."""
+    preset = {"seeds": [1, 2], "accuracy": {"dem_study": False, "subset": "default"}, "campaign": "quick"}
+    overlay = {"seeds": [3], "accuracy": {"dem_study": True}}
+    assert release.merge_config(preset, overlay) == {"seeds": [3], "campaign": "quick",
+                                                     "accuracy": {"dem_study": True, "subset": "default"}}
+
+
 def gzip_run(tmp_path):
     """A model-made case's pre-shear and Heaviside run as one minimal CSV, gzip-compressed (as in a release)."""
     case = synthetic.write_case(tmp_path / "made", default_params(), seed=1, preshear_strain=2.0,
