@@ -199,17 +199,28 @@ def make_release(case_dirs, out, config, command: str, with_states: bool = False
     cfg = {}
     for path in configs:
         cfg = merge_config(cfg, yaml.safe_load(path.read_text()) or {})
+    sources = {}
+    for case_dir in map(Path, case_dirs):
+        parent, grand = case_dir.parent.name, case_dir.parent.parent.name
+        source = ("accuracy/bulk" if (grand, parent) == ("accuracy", "bulk")
+                  else "dem" if parent == "dem" and grand != "accuracy" else None)
+        if source is None:
+            raise DEMInputError(f"{case_dir}: not a case of a results folder's {' or '.join(SOURCES)}/ "
+                                f"(<results>/dem/<case> or <results>/accuracy/bulk/<cell>_s<seed>)")
+        if case_dir.name in {d.name for d in sources}:
+            raise DEMInputError(f"{case_dir}: case {case_dir.name} given twice")
+        sources[case_dir] = source
     out.mkdir(parents=True, exist_ok=True)
     names = ["config.yaml"] if len(configs) == 1 else [f"config-{k}.yaml" for k in range(1, len(configs) + 1)]
-    for path, name in zip(configs, names):
-        shutil.copyfile(path, out / name)
-    cases = {}
-    for case_dir in map(Path, case_dirs):
-        source = case_dir.parent.name if case_dir.parent.name == "dem" else "accuracy/bulk"
-        if case_dir.name in cases:
-            raise DEMInputError(f"{case_dir}: case {case_dir.name} given twice")
-        cases[case_dir.name] = {"source": source,
-                                **_release_case(case_dir, out / CASES_DIR / case_dir.name, with_states)}
+    try:
+        for path, name in zip(configs, names):
+            shutil.copyfile(path, out / name)
+        cases = {case_dir.name: {"source": source,
+                                 **_release_case(case_dir, out / CASES_DIR / case_dir.name, with_states)}
+                 for case_dir, source in sources.items()}
+    except BaseException:       # no half-made release is left behind
+        shutil.rmtree(out)
+        raise
     files = {str(p.relative_to(out)): {"sha256": sha256(p), "bytes": p.stat().st_size}
              for p in sorted(out.rglob("*")) if p.is_file() and p.name != MANIFEST}
     yade = sorted({c["yade_version"] for c in cases.values()})

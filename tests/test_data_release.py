@@ -265,3 +265,14 @@ def test_a_missing_release_stops_the_workflow_naming_its_manifest(tmp_path):
     run = snakemake("-n", "--configfile", config, timeout=300)
     assert run.returncode == 2
     assert f"config key 'release': {tmp_path / 'nothere' / 'manifest.yaml'}: not readable" in run.stderr
+
+
+@pytest.mark.parametrize("where, words", [("accuracy/dem/p1", "not a case of a results folder's dem or accuracy/bulk/"),
+                                          ("dem/p100000_I0.01_s1", "not a finished DEM case")])
+def test_release_of_what_is_not_a_finished_case_is_refused_and_writes_nothing(tmp_path, where, words):
+    (tmp_path / "results" / where).mkdir(parents=True)
+    run = subprocess.run([sys.executable, "-m", "dem_contract", "release", "--cases", str(tmp_path / "results" / where),
+                          "--config", str(ROOT / "config" / "ci.yaml"), "--out", str(tmp_path / "data" / "x")],
+                         cwd=ROOT, capture_output=True, text=True)
+    assert run.returncode == 2 and words in run.stderr
+    assert not (tmp_path / "data" / "x").exists()
