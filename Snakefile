@@ -28,6 +28,7 @@ validate(config, "workflow/schemas/config.schema.yaml")  # fills the schema's de
 include: "workflow/rules/common.smk"
 include: "workflow/rules/resources.smk"
 include: "workflow/rules/dem.smk"
+include: "workflow/rules/release.smk"
 include: "workflow/rules/calibrate.smk"
 include: "workflow/rules/compare.smk"
 include: "workflow/rules/claims.smk"

@@ -1,15 +1,22 @@
-"""Command line of the DEM contract: ``python -m dem_contract import --meta case.yaml --out results/dem``.
+"""Command line of the DEM contract: ``import`` external runs; ``release``, ``verify``, ``restore`` a data release.
 
 ``import`` writes external DEM runs (minimal CSVs and a metadata YAML,
 docs/own-dem-data.md) into the contract's layout (docs/data-contract.md) and
-reads them back through the contract's reader. Bad input exits with status 2
-and a message naming the file (and key or row).
+reads them back through the contract's reader. ``release`` writes a finished
+campaign's DEM cases as a data release (docs/data-release.md), ``verify``
+checks a release's checksums and reads every case back, ``restore`` writes one
+released case into a results folder as a finished case. Bad input exits with
+status 2 and a message naming the file (and key or row); a release that fails
+``verify`` exits with status 1.
 """
 from __future__ import annotations
 
 import argparse
+import shlex
 import sys
+from pathlib import Path
 
+from . import release
 from .importer import import_cases, summary
 from .series import DEMInputError
 
@@ -21,22 +28,63 @@ def build_parser() -> argparse.ArgumentParser:
     imp.add_argument("--meta", required=True, help="the metadata YAML (docs/own-dem-data.md); run files are "
                                                    "relative to its folder")
     imp.add_argument("--out", required=True, help="the DEM folder to write, e.g. results/dem")
+    rel = sub.add_parser("release", help="finished DEM cases -> a data release folder data/<name>/")
+    rel.add_argument("--cases", nargs="+", required=True,
+                     help="finished case folders: <results>/dem/<case> or <results>/accuracy/bulk/<cell>_s<seed>")
+    rel.add_argument("--config", required=True, nargs="+",
+                     help="the campaign's config file(s) as run, in the order of --configfile")
+    rel.add_argument("--out", required=True, help="the release folder to write, e.g. data/<campaign>")
+    rel.add_argument("--states", action="store_true", help="also release each case's preshear.final.yade.gz")
+    ver = sub.add_parser("verify", help="check releases' checksums and read every released case back")
+    ver.add_argument("releases", nargs="+", help="release folders, e.g. data/*/")
+    res = sub.add_parser("restore", help="one released case -> <out> as a finished DEM case")
+    res.add_argument("--release", required=True, help="the release folder")
+    res.add_argument("--case", required=True, help="the case's label")
+    res.add_argument("--out", required=True, help="the case folder to write, e.g. results/dem/<case>")
     return ap
+
+
+def run(args) -> int:
+    """One sub-command; returns the exit status."""
+    if args.command == "import":
+        cases = import_cases(args.meta, args.out)
+        print(f"dem_contract import: {len(cases)} case(s) written and read back")
+        print(summary(cases))
+    elif args.command == "release":
+        command = "python -m dem_contract release " + shlex.join(sys.argv[2:] if sys.argv[1:2] == ["release"]
+                                                                 else ["--cases", *args.cases, "--config",
+                                                                       *args.config, "--out", args.out]
+                                                                 + (["--states"] if args.states else []))
+        out = release.make_release(args.cases, args.out, args.config, command, args.states)
+        manifest = release.read_manifest(out)
+        print(f"dem_contract release: {len(manifest['cases'])} case(s) in {out}, "
+              f"{manifest['total_bytes'] / 1e6:.3f} MB; all releases beside it: "
+              f"{release.release_bytes(Path(out).parent) / 1e6:.3f} MB (budget 20 MB in the repository)")
+    elif args.command == "verify":
+        bad = 0
+        for folder in args.releases:
+            problems = release.verify(folder)
+            bad += len(problems)
+            print(f"dem_contract verify: {folder}: " + ("ok" if not problems else f"{len(problems)} problem(s)"))
+            for problem in problems:
+                print(f"  {problem}")
+        return 1 if bad else 0
+    else:
+        out = release.restore_case(args.release, args.case, args.out)
+        print(f"dem_contract restore: {args.case} from {args.release} -> {out}")
+    return 0
 
 
 def main(argv=None) -> int:
     args = build_parser().parse_args(argv)
     try:
-        cases = import_cases(args.meta, args.out)
+        return run(args)
     except DEMInputError as exc:
-        print(f"dem_contract import: error: {exc}", file=sys.stderr)
+        print(f"dem_contract {args.command}: error: {exc}", file=sys.stderr)
         return 2
     except OSError as exc:
-        print(f"dem_contract import: error: {exc.filename or args.out}: {exc.strerror or exc}", file=sys.stderr)
+        print(f"dem_contract {args.command}: error: {exc.filename or ''}: {exc.strerror or exc}", file=sys.stderr)
         return 2
-    print(f"dem_contract import: {len(cases)} case(s) written and read back")
-    print(summary(cases))
-    return 0
 
 
 if __name__ == "__main__":

@@ -133,6 +133,8 @@ def _check_run(where, run):
     for k, rev in enumerate(revs):
         if not isinstance(rev, dict) or not isinstance(rev.get("strain"), (int, float)):
             _fail(f"{where}.reversals[{k}]", "expected a mapping with the strain of the reversal ('strain')")
+        if "t" in rev and not isinstance(rev["t"], (int, float)):
+            _fail(f"{where}.reversals[{k}]", f"t = {rev['t']!r}: expected the time of the reversal's row, a number")
         transition = rev.get("transition", "half_cosine" if name == "sinusoidal" else "heaviside")
         if transition not in TRANSITIONS:
             _fail(f"{where}.reversals[{k}]", f"transition {transition!r}: expected one of {list(TRANSITIONS)}")
@@ -179,11 +181,19 @@ def reversal_rows(data: pd.DataFrame, reversals, where) -> list:
     :math:`\Delta\gamma` is the median strain step of the run. The row must lie
     within one strain step of the stated strain.
     """
-    s = data["strain"].to_numpy(float)
+    s, t = data["strain"].to_numpy(float), data["t"].to_numpy(float)
     step = float(np.median(np.abs(np.diff(s))))
     rows, lo, direction = [], 0, 1.0
     for k, rev in enumerate(reversals):
         target = float(rev["strain"])
+        if "t" in rev:      # the reversal's row named by its time (a data release: exact, docs/data-release.md)
+            i = int(np.argmin(np.abs(t - float(rev["t"]))))
+            if i < lo or abs(t[i] - float(rev["t"])) > 1e-9 * max(1.0, abs(t[i])) or i + 1 >= len(t):
+                _fail(where, f"reversal {k + 1} at t {float(rev['t']):.17g}: no data row at that time after data "
+                             f"row {lo + 1} with a row after it")
+            rows.append(i)
+            lo, direction = i + 1, -direction
+            continue
         hit = np.nonzero(direction * (s[lo:] - target) >= -0.5 * step)[0]
         if hit.size == 0:
             _fail(where, f"reversal {k + 1} at strain {target:g}: the run's strain never reaches it after "
@@ -259,7 +269,8 @@ def _write_case(meta, case, case_dir):
                                                   "mirrored": mirrored, **costs.get("preshear", {})})
         else:           # one pre-shear per case: a later run starts where the first run's pre-shear ends
             t0, s0 = float(data["t"].iloc[rows[0]]), float(data["strain"].iloc[rows[0]])
-            data = data.assign(t=data["t"] - t0 + pre_end[0], strain=data["strain"] - s0 + pre_end[1])
+            if (t0, s0) != pre_end:     # no shift (and no rounding) when the run holds the same pre-shear
+                data = data.assign(t=data["t"] - t0 + pre_end[0], strain=data["strain"] - s0 + pre_end[1])
         t, s = data["t"].to_numpy(float), data["strain"].to_numpy(float)
         reversals = []
         for k, (i, r) in enumerate(zip(rows, revs)):

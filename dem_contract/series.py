@@ -1,6 +1,7 @@
 """Read and check one DEM time series (and its sidecar) of the DEM contract (docs/data-contract.md)."""
 from __future__ import annotations
 
+import gzip
 import json
 from pathlib import Path
 
@@ -127,8 +128,8 @@ def _check_rows_complete(path: Path) -> None:
         last line when it does not end with a newline.
     """
     try:
-        text = path.read_text()
-    except (OSError, UnicodeDecodeError) as exc:
+        text = gzip.open(path, "rt").read() if path.suffix == ".gz" else path.read_text()
+    except (OSError, UnicodeDecodeError, EOFError) as exc:
         raise DEMInputError(f"{path}: not a readable CSV ({exc})") from None
     lines = text.splitlines()
     if not lines:

@@ -1,0 +1,356 @@
+"""A data release of finished DEM cases: make it, verify it, restore its cases as finished (docs/data-release.md).
+
+A release folder ``data/<name>/`` holds, per case ``cases/<label>/``:
+
+- ``<protocol>.csv.gz``: one minimal CSV per reversal run (the pre-shear's rows
+  followed by the run's, every contract column, gzip without a time stamp so the
+  bytes depend on the data only), the format ``python -m dem_contract import``
+  reads (docs/own-dem-data.md);
+- ``case.yaml``: the importer's metadata (pressure, I, cell, N, simulator, the
+  runs and the time and strain of each reversal, the stages' costs);
+- ``sidecars/<stage>.json``: the DEM stages' sidecars as YADE wrote them
+  (provenance: the scene, its sha256, YADE's version, CPU and wall time, steps,
+  N), restored verbatim, so the calibration, the comparison and the claims read
+  the same costs and disks as from the original results;
+- ``preshear.final.yade.gz`` (optional): the pre-shear's final state, for new
+  reversals branching from it;
+
+and ``config.yaml`` (the campaign's config file as run; ``config-<k>.yaml``,
+k = 1, 2, ..., when it ran with several, in their order) and ``manifest.yaml``
+(the config, merged as Snakemake merges it, the commit of the code, YADE's version, the date, a sha256 and a size
+per file, the commands that regenerate the DEM and the release). Nothing in a
+release is edited by hand: ``verify`` refuses a file whose checksum differs.
+"""
+from __future__ import annotations
+
+import datetime
+import gzip
+import hashlib
+import io
+import json
+import shutil
+import subprocess
+import tempfile
+from pathlib import Path
+
+import pandas as pd
+import yaml
+
+from .derived import reversal_kinds, split_transients
+from .importer import import_cases
+from .series import CONTRACT_COLUMNS, DEMInputError, read_series, read_sidecar
+
+#: The manifest's file name, and the release's layout.
+MANIFEST = "manifest.yaml"
+CASES_DIR = "cases"
+STATE = "preshear.final.yade.gz"
+#: Stages whose sidecars every case has before its reversal runs.
+BASE_STAGES = ("pack", "preshear")
+#: The code a DEM result depends on (its last commit is named in the manifest).
+DEM_CODE = ("yade_scripts", "campaign/scenes.py", "campaign/scene_spec.py")
+#: Results sub-folders a released case can come from (the campaign's, the bulk study's).
+SOURCES = ("dem", "accuracy/bulk")
+
+
+def sha256(path) -> str:
+    """The file's SHA-256, hex."""
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def write_csv_gz(frame: pd.DataFrame, path) -> None:
+    """A table as gzip-compressed CSV with no time stamp (equal data give equal bytes)."""
+    text = frame.to_csv(index=False).encode()
+    with open(path, "wb") as raw, gzip.GzipFile(fileobj=raw, mode="wb", mtime=0, filename="") as f:
+        f.write(text)
+
+
+def case_protocols(case_dir) -> list:
+    """The reversal runs of a finished case: every ``<stem>.csv`` with a sidecar, but the pack and pre-shear."""
+    case_dir = Path(case_dir)
+    return sorted(p.stem for p in case_dir.glob("*.csv")
+                  if p.stem not in BASE_STAGES and p.with_suffix(".json").is_file())
+
+
+def merge_config(base: dict, overlay: dict) -> dict:
+    """``overlay`` over ``base``, mappings merged key by key (Snakemake's merge of several --configfile)."""
+    out = dict(base)
+    for key, value in overlay.items():
+        out[key] = merge_config(out[key], value) if isinstance(value, dict) and isinstance(out.get(key), dict) \
+            else value
+    return out
+
+
+def pre_tail_rows(n_pre: int, n_run: int) -> int:
+    r"""Pre-shear rows a case's second and later runs carry: its last :math:`K` rows, not all :math:`n_p`.
+
+    The first run holds the whole pre-shear (the importer's ``preshear.csv``); a
+    later one needs only the row at its reversal and enough rows before it for
+    the importer to see the pre-shear's direction, which it takes from the
+    median rate of a file's first :math:`\max(10, n/10)` rows:
+    :math:`K = \min(n_p, \max(11, \lceil n_r/9 \rceil + 2))` rows make all of
+    them pre-shear rows (:math:`K \ge \max(10, (K + n_r)/10)`).
+    """
+    return min(n_pre, max(11, -(-n_run // 9) + 2))
+
+
+def _git(*args, cwd) -> str:
+    try:
+        return subprocess.run(["git", *args], cwd=cwd, capture_output=True, text=True, check=True).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+
+
+def _release_case(case_dir: Path, out: Path, with_state: bool) -> dict:
+    """One finished case into ``out``: its minimal CSVs, case YAML, sidecars (and state). Returns its summary."""
+    label = case_dir.name
+    scene = read_sidecar(case_dir / "scene.json")
+    pre_side = read_sidecar(case_dir / "preshear.json")
+    if not scene or not pre_side:
+        raise DEMInputError(f"{case_dir}: not a finished DEM case (scene.json and preshear.json expected)")
+    protocols = case_protocols(case_dir)
+    if not protocols:
+        raise DEMInputError(f"{case_dir}: no finished reversal run (<protocol>.csv with its .json)")
+    pre = read_series(case_dir / "preshear.csv", what="the case's pre-shear")
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "sidecars").mkdir(exist_ok=True)
+    runs = []
+    for protocol in protocols:
+        path = case_dir / f"{protocol}.csv"
+        run = read_series(path, what="a reversal run")
+        side = read_sidecar(path.with_suffix(".json"))
+        kinds = reversal_kinds(side, protocol, what=str(path))
+        reversals = []
+        for tr, kind in zip(split_transients(pre, run, side, what=str(path)), kinds):
+            entry = {"strain": float(tr.strain0), "t": float(tr.t0)}
+            if kind["kind"] == "sinusoidal":
+                entry.update(transition="half_cosine", transition_strain=float(kind["transition_strain"]))
+            else:
+                entry["transition"] = "heaviside"
+            reversals.append(entry)
+        lead = pre if not runs else pre.iloc[-pre_tail_rows(len(pre), len(run)):]
+        write_csv_gz(pd.concat([lead, run], ignore_index=True)[list(CONTRACT_COLUMNS)], out / f"{protocol}.csv.gz")
+        runs.append({"file": f"{protocol}.csv.gz", "protocol": protocol, "reversals": reversals})
+    stages = [*BASE_STAGES, *protocols]
+    costs = {}
+    for stage in ["scene", *stages]:
+        src = case_dir / f"{stage}.json"
+        if src.is_file():
+            shutil.copyfile(src, out / "sidecars" / src.name)
+        side = read_sidecar(src) if stage != "scene" else {}
+        cost = {k: side[k] for k in ("cpu_time_s", "wall_time_s", "steps") if k in side}
+        if cost:
+            costs[stage] = cost
+    geometry = scene.get("geometry") or {}
+    material = scene.get("material") or {}
+    meta = {"pressure": float(material.get("pressure", pre_side.get("pressure_Pa", 0.0))),
+            "inertial_number": float((scene.get("loading") or {}).get("inertial_number",
+                                                                       pre_side.get("inertial_number", 0.0))),
+            "simulator": f"YADE {pre_side.get('yade_version', 'unknown')}",
+            "cell": {k: float(geometry[k]) for k in ("H_over_d", "W_over_H") if k in geometry},
+            "notes": f"data release of case {label}; the DEM sidecars as written are in sidecars/",
+            "cases": [{"seed": int(scene.get("seed", pre_side.get("seed", 0))), "runs": runs, "costs": costs}]}
+    if "N" in pre_side:
+        meta["N"] = int(pre_side["N"])
+    if not meta["cell"]:
+        del meta["cell"]
+    (out / "case.yaml").write_text(yaml.safe_dump(meta, sort_keys=False))
+    if with_state:
+        if not (case_dir / STATE).is_file():
+            raise DEMInputError(f"{case_dir / STATE}: file not found (asked for with --states)")
+        shutil.copyfile(case_dir / STATE, out / STATE)
+    return {"protocols": protocols, "seed": meta["cases"][0]["seed"], "N": meta.get("N"),
+            "yade_version": pre_side.get("yade_version", "unknown"),
+            "cpu_time_s": sum(c.get("cpu_time_s", 0.0) for c in costs.values())}
+
+
+def make_release(case_dirs, out, config, command: str, with_states: bool = False, repo=None) -> Path:
+    """Write a data release of finished DEM cases into ``out`` (a new or empty folder).
+
+    Parameters
+    ----------
+    case_dirs : sequence of str or Path
+        Finished cases: ``<results>/dem/<case>/`` or ``<results>/accuracy/bulk/<cell>_s<seed>/``.
+    out : str or Path
+        The release folder, e.g. ``data/<campaign>``.
+    config : str or Path, or a sequence of them
+        The campaign's config file(s) as run, in the order given to ``--configfile``
+        (copied to ``config.yaml``, or ``config-1.yaml``, ``config-2.yaml``, ...; merged into the manifest).
+    command : str
+        The command line that made the release (named in the manifest).
+    with_states : bool
+        Also release each case's pre-shear final state (``preshear.final.yade.gz``).
+    repo : str or Path, optional
+        The repository whose commit is recorded (default: this package's).
+
+    Returns
+    -------
+    Path
+        The release folder.
+    """
+    out = Path(out)
+    configs = [Path(config)] if isinstance(config, (str, Path)) else [Path(c) for c in config]
+    repo = Path(repo) if repo else Path(__file__).resolve().parents[1]
+    if out.exists() and any(out.iterdir()):
+        raise DEMInputError(f"{out}: exists and is not empty; a release is written once (delete it to remake it)")
+    cfg = {}
+    for path in configs:
+        cfg = merge_config(cfg, yaml.safe_load(path.read_text()) or {})
+    sources = {}
+    for case_dir in map(Path, case_dirs):
+        parent, grand = case_dir.parent.name, case_dir.parent.parent.name
+        source = ("accuracy/bulk" if (grand, parent) == ("accuracy", "bulk")
+                  else "dem" if parent == "dem" and grand != "accuracy" else None)
+        if source is None:
+            raise DEMInputError(f"{case_dir}: not a case of a results folder's {' or '.join(SOURCES)}/ "
+                                f"(<results>/dem/<case> or <results>/accuracy/bulk/<cell>_s<seed>)")
+        if case_dir.name in {d.name for d in sources}:
+            raise DEMInputError(f"{case_dir}: case {case_dir.name} given twice")
+        sources[case_dir] = source
+    out.mkdir(parents=True, exist_ok=True)
+    names = ["config.yaml"] if len(configs) == 1 else [f"config-{k}.yaml" for k in range(1, len(configs) + 1)]
+    try:
+        for path, name in zip(configs, names):
+            shutil.copyfile(path, out / name)
+        cases = {case_dir.name: {"source": source,
+                                 **_release_case(case_dir, out / CASES_DIR / case_dir.name, with_states)}
+                 for case_dir, source in sources.items()}
+    except BaseException:       # no half-made release is left behind
+        shutil.rmtree(out)
+        raise
+    files = {str(p.relative_to(out)): {"sha256": sha256(p), "bytes": p.stat().st_size}
+             for p in sorted(out.rglob("*")) if p.is_file() and p.name != MANIFEST}
+    yade = sorted({c["yade_version"] for c in cases.values()})
+    targets = " ".join(f"<results_dir>/{c['source']}/{label}/{p}.csv"
+                       for label, c in cases.items() for p in c["protocols"])
+    manifest = {
+        "release": out.name,
+        "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
+        "code_commit": _git("rev-parse", "HEAD", cwd=repo),
+        "code_dirty": bool(_git("status", "--porcelain", "--untracked-files=no", cwd=repo)),
+        # the last commit that changed the DEM's code (the YADE scene and stages, the config -> scene mapping)
+        "dem_code_commit": _git("log", "-1", "--format=%H", "--", *DEM_CODE, cwd=repo),
+        "yade_version": yade[0] if len(yade) == 1 else yade,
+        "states": with_states,
+        "regenerate": {
+            "dem": f"snakemake -j2 --configfile {' '.join(f'{out}/{n}' for n in names)}"
+                   f" --config results_dir=<results_dir> {targets}",
+            "release": command,
+        },
+        "cases": cases,
+        "config": cfg,
+        "files": files,
+        "total_bytes": sum(f["bytes"] for f in files.values()),
+    }
+    (out / MANIFEST).write_text(yaml.safe_dump(manifest, sort_keys=False))
+    return out
+
+
+def read_manifest(release) -> dict:
+    """A release's manifest, checked for its keys."""
+    path = Path(release) / MANIFEST
+    try:
+        manifest = yaml.safe_load(path.read_text())
+    except OSError as exc:
+        raise DEMInputError(f"{path}: not readable ({exc.strerror or exc})") from None
+    if not isinstance(manifest, dict) or not {"files", "cases", "config"} <= set(manifest):
+        raise DEMInputError(f"{path}: expected a mapping with 'files', 'cases' and 'config'")
+    return manifest
+
+
+def checksum_problems(release) -> list:
+    """Every file of the release whose sha256 or size differs from the manifest, is missing, or is not listed."""
+    release = Path(release)
+    listed = read_manifest(release)["files"]
+    problems = []
+    for name, entry in listed.items():
+        path = release / name
+        if not path.is_file():
+            problems.append(f"{path}: listed in the manifest, missing")
+        elif path.stat().st_size != entry["bytes"] or sha256(path) != entry["sha256"]:
+            problems.append(f"{path}: sha256 {sha256(path)} ({path.stat().st_size} bytes), the manifest says "
+                            f"{entry['sha256']} ({entry['bytes']} bytes): edited after the release")
+    for path in sorted(release.rglob("*")):
+        name = str(path.relative_to(release))
+        if path.is_file() and name != MANIFEST and name not in listed:
+            problems.append(f"{path}: not in the manifest")
+    return problems
+
+
+def restore_case(release, label, out) -> Path:
+    """Write a released case into ``out`` (``<results>/dem/<label>/``) as a finished DEM case.
+
+    The series go through the importer (``import_cases``: the contract's checked
+    reader and its reversal splitter), then the DEM's own sidecars replace the
+    importer's, so every stage reads the costs, disks and scene as the DEM wrote them.
+
+    Raises
+    ------
+    DEMInputError
+        An unknown case, a file the contract refuses, or a released sidecar whose
+        reversal time disagrees with the series.
+    """
+    release, out = Path(release), Path(out)
+    src = release / CASES_DIR / label
+    if not (src / "case.yaml").is_file():
+        raise DEMInputError(f"{release}: no released case {label!r} (no {src / 'case.yaml'})")
+    with tempfile.TemporaryDirectory(prefix="release-") as tmp:
+        (imported,) = import_cases(src / "case.yaml", tmp)
+        for side in sorted((src / "sidecars").glob("*.json")):
+            ours = read_sidecar(imported / side.name)
+            theirs = json.loads(side.read_text())
+            if "reversal_t" in theirs and abs(ours.get("reversal_t", float("nan")) - theirs["reversal_t"]) > 1e-9:
+                raise DEMInputError(f"{side}: reversal_t {theirs['reversal_t']} but the series reverse at "
+                                    f"{ours.get('reversal_t')}")
+            shutil.copyfile(side, imported / side.name)
+        out.mkdir(parents=True, exist_ok=True)
+        for path in imported.iterdir():
+            shutil.move(str(path), out / path.name)
+    if (src / STATE).is_file():
+        shutil.copyfile(src / STATE, out / STATE)
+    return out
+
+
+def verify(release) -> list:
+    """Checksums against the manifest, then every case restored into a scratch folder (the contract's reader)."""
+    problems = checksum_problems(release)
+    for label in read_manifest(release)["cases"]:
+        with tempfile.TemporaryDirectory(prefix="verify-") as tmp:
+            try:
+                restore_case(release, label, Path(tmp) / label)
+            except DEMInputError as exc:
+                problems.append(str(exc))
+    return problems
+
+
+def released_cases(releases, protocols=(), base=".") -> dict:
+    """Case label -> release folder, over the releases named (a folder or a list), for cases holding ``protocols``.
+
+    A case released without one of ``protocols`` is left out: its DEM runs as usual.
+    """
+    if isinstance(releases, (str, Path)):
+        releases = [releases]
+    found = {}
+    for release in releases or []:
+        release = Path(base) / release
+        for label, case in read_manifest(release)["cases"].items():
+            if set(protocols) <= set(case["protocols"]):
+                found.setdefault(label, str(release))
+    return found
+
+
+def release_bytes(root) -> int:
+    """Bytes of every release under ``root`` (``data/``): the repository's budget is 20 MB."""
+    return sum(p.stat().st_size for p in Path(root).rglob("*") if p.is_file())
+
+
+def case_files(release, label) -> list:
+    """The files of one released case (a Snakemake rule's input)."""
+    return sorted(str(p) for p in (Path(release) / CASES_DIR / label).rglob("*") if p.is_file())
+
+
+__all__ = ["DEMInputError", "MANIFEST", "sha256", "write_csv_gz", "case_protocols", "make_release", "read_manifest",
+           "checksum_problems", "restore_case", "verify", "released_cases", "release_bytes", "case_files"]
