@@ -48,11 +48,16 @@ class Settings:
 
 
 def _route2_start(replays, doc, model, r1_values, steady, sigma_mu, s2, xc_margin):
-    """First start with a finite score that can shear steadily: the route-1 values, their linear part, the defaults."""
+    """First start with a finite score that can shear steadily: the route-1 values, their linear part, the defaults
+    (as they are, with their pole above every run's start, and their linear part: the defaults' pole can sit
+    where a run starts, and a set that cannot be integrated is no start)."""
     cands = [r1_values]
     if model == "model1":
-        lin = dict(r1_values, c1=-1.0, c2=1.0, X_c=max(r1_values["X_c"], fits.xc_lower_bound(steady, xc_margin) + 0.01))
-        cands += [lin, default_params().model1.__dict__]
+        x_free = fits.xc_lower_bound(steady, xc_margin) + 0.01    # a pole no run's start reaches
+        lin = dict(r1_values, c1=-1.0, c2=1.0, X_c=max(r1_values["X_c"], x_free))
+        paper = default_params().model1.__dict__
+        cands += [lin, paper, dict(paper, X_c=max(paper["X_c"], x_free)),
+                  dict(paper, c1=-1.0, c2=1.0, X_c=max(paper["X_c"], x_free))]
     else:
         cands += [default_params().model2.__dict__]
     valid = []

@@ -8,7 +8,7 @@ this lock in ``onstart`` (only a run that executes jobs: a dry run, ``--summary`
 ``--report`` or "Nothing to be done" never takes it) and releases it in
 ``onsuccess`` / ``onerror``; a second run is refused before its first job.
 
-As ``yade_scripts/stagelock.py`` does for one stage: an advisory ``flock`` held
+The lock is ``yade_scripts/stagelock.py``'s, for a folder instead of a stage: an advisory ``flock`` held
 for the life of the process (the kernel drops it when the process dies, even on
 SIGKILL) on a file that names its owner (PID, host, start time, working
 directory). A lock file left by a dead process on this host is taken over with
@@ -18,8 +18,6 @@ the file's mtime every ``TOUCH_S`` seconds from a daemon thread).
 """
 from __future__ import annotations
 
-import errno
-import fcntl
 import json
 import os
 import socket
@@ -27,26 +25,17 @@ import sys
 import threading
 import time
 
+from .scene_spec import yade_scripts_module
+
+_stagelock = yade_scripts_module("stagelock")
+
 LOCK_NAME = ".snakemake-writer.lock"
-STALE_S = 300.0  # a lock of another host not renewed for this long is stale
-TOUCH_S = 10.0  # the owner renews its lock this often
+STALE_S = _stagelock.STALE_S  # a lock of another host not renewed for this long is stale
+TOUCH_S = _stagelock.TOUCH_S  # the owner renews its lock this often
 EXIT_BUSY = 5  # exit code of a refused run (as a refused DEM stage)
 
-
-class ResultsBusy(RuntimeError):
-    """Another live Snakemake writes the results folder."""
-
-
-def _read(fd) -> dict | None:
-    os.lseek(fd, 0, os.SEEK_SET)
-    raw = os.read(fd, 65536).decode("utf-8", "replace").strip()
-    if not raw:
-        return None
-    try:
-        rec = json.loads(raw)
-    except ValueError:
-        return {"raw": raw}
-    return rec if isinstance(rec, dict) else {"raw": raw}
+#: Another live Snakemake writes the results folder (the stage lock's refusal).
+ResultsBusy = _stagelock.Busy
 
 
 def describe(rec: dict | None) -> str:
@@ -57,8 +46,12 @@ def describe(rec: dict | None) -> str:
             f"in {rec.get('cwd', '?')}")
 
 
-class ResultsLock:
+class ResultsLock(_stagelock.StageLock):
     """Exclusive ownership of one results folder by one Snakemake process.
+
+    The stage lock's ``acquire`` (flock, the re-check that the path is still the
+    locked file, stale-lock takeover); the record names the working directory and
+    a daemon thread renews it, since Snakemake runs no loop of its own.
 
     Parameters
     ----------
@@ -69,50 +62,19 @@ class ResultsLock:
     """
 
     def __init__(self, results_dir, log=print):
+        super().__init__(results_dir, "results", log)
         self.dir = os.path.abspath(results_dir)
         self.path = os.path.join(self.dir, LOCK_NAME)
-        self.log = log
-        self.fd = None
         self._stop = threading.Event()
 
     def acquire(self) -> dict | None:
         """Take the lock or raise ``ResultsBusy`` naming its owner; returns the stale record taken over, or None."""
-        os.makedirs(self.dir, exist_ok=True)
-        for _ in range(50):
-            fd = os.open(self.path, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC, 0o644)
-            try:
-                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except OSError as exc:
-                rec = _read(fd)
-                os.close(fd)
-                if exc.errno in (errno.EWOULDBLOCK, errno.EAGAIN, errno.EACCES):
-                    raise ResultsBusy(self._busy_message(rec)) from None
-                raise
-            try:  # the previous owner may have removed the file between our open and flock
-                same = os.stat(self.path).st_ino == os.fstat(fd).st_ino
-            except FileNotFoundError:
-                same = False
-            if not same:
-                os.close(fd)
-                continue
-            old = _read(fd)
-            if old is not None and not self._may_take_over(old, fd):
-                os.close(fd)
-                raise ResultsBusy(self._busy_message(old, foreign=True))
-            self.fd = fd
-            self._write()
-            threading.Thread(target=self._renew, name="results-lock", daemon=True).start()
-            if old is not None:
-                self.log(f"stale results-folder lock of {describe(old)} taken over (that process is gone): {self.path}")
-            return old
-        raise RuntimeError(f"could not create the lock file {self.path}")
+        old = super().acquire()
+        threading.Thread(target=self._renew, name="results-lock", daemon=True).start()
+        return old
 
-    def _may_take_over(self, rec: dict, fd) -> bool:
-        """flock succeeded, so no process on this host holds the lock; a record of
-        another host (shared file system) is trusted only until it goes stale."""
-        if rec.get("host") in (None, socket.gethostname()):
-            return True
-        return time.time() - os.fstat(fd).st_mtime > STALE_S
+    def _taken_over_line(self, old) -> str:
+        return f"stale results-folder lock of {describe(old)} taken over (that process is gone): {self.path}"
 
     def _busy_message(self, rec, foreign=False) -> str:
         where = f"results folder {self.dir} is being written by {describe(rec)}"
@@ -142,7 +104,7 @@ class ResultsLock:
                 return
 
     def release(self) -> None:
-        """Remove the lock file (still holding the lock), then unlock."""
+        """Remove the lock file (still holding the lock), then unlock; the results folder stays."""
         if self.fd is None:
             return
         self._stop.set()

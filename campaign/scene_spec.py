@@ -16,12 +16,17 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 @functools.lru_cache(maxsize=None)
-def scene_module(root=ROOT):
-    """yade_scripts/scene.py (pure Python), loaded from its file: yade_scripts is not a package."""
-    spec = importlib.util.spec_from_file_location("_yade_scene", Path(root) / "yade_scripts" / "scene.py")
+def yade_scripts_module(name: str, root=ROOT):
+    """The pure-Python ``yade_scripts/<name>.py`` (no YADE import), loaded from its file: yade_scripts is not a package."""
+    spec = importlib.util.spec_from_file_location(f"yade_scripts_{name}", Path(root) / "yade_scripts" / f"{name}.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
+
+
+def scene_module(root=ROOT):
+    """yade_scripts/scene.py: what a scene accepts, its defaults and its validator."""
+    return yade_scripts_module("scene", root)
 
 
 def scene_default(section: str, key: str):

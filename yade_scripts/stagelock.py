@@ -101,10 +101,13 @@ class StageLock:
             self.fd = fd
             self._write()
             if old is not None:
-                self.log(f"[{self.stage}] stale lock of {describe(old)} taken over "
-                         f"(that process is gone): {self.path}")
+                self.log(self._taken_over_line(old))
             return old
         raise RuntimeError(f"could not create the lock file {self.path}")
+
+    def _taken_over_line(self, old):
+        """The one line logged when a stale lock is taken over."""
+        return f"[{self.stage}] stale lock of {describe(old)} taken over (that process is gone): {self.path}"
 
     def _may_take_over(self, rec, fd):
         """flock succeeded, so no process on this machine holds the lock; a record from
