@@ -73,6 +73,21 @@ def test_the_shipped_overlay_plans_every_cell_and_seed_and_nothing_of_the_campai
     assert not any(rule.startswith("dem_") for rule in c), c
 
 
+def test_the_paper_physics_overlay_plans_the_wide_and_the_narrow_cell_at_kappa_1e5(workflow_dir):
+    """config/bulk_validation_paper.yaml over config/bulk.yaml: 2 cells x 2 seeds, pre-shear and one
+    Heaviside reversal each, at the bulk preset's kappa and I, and nothing of the bulk campaign."""
+    overlay = yaml.safe_load((ROOT / "config" / "bulk_validation_paper.yaml").read_text())["accuracy"]["bulk_vs_walls"]
+    bulk = yaml.safe_load((ROOT / "config" / "bulk.yaml").read_text())
+    assert overlay["kappa"] == bulk["material"]["kappa"] == 1.0e5
+    assert overlay["inertial_number"] == bulk["loading"]["inertial_numbers"][0] == 1.0e-3
+    result = helpers.dry_run("bulk_vs_walls", "--configfile", "config/bulk.yaml", "config/bulk_validation_paper.yaml",
+                             cwd=workflow_dir)
+    assert result.returncode == 0, result.stderr[-3000:]
+    c = counts(result.stdout)
+    assert c.get("bulk_study_pack") == c.get("bulk_study_heaviside") == 4 and c.get("bulk_vs_walls") == 1
+    assert not any(rule.startswith("dem_") for rule in c), c
+
+
 def test_a_train_cell_runs_its_train_with_its_own_seeds_in_place_of_the_heaviside_reversal(tmp_path):
     config = two_cells(tmp_path)
     config["accuracy"]["bulk_vs_walls"]["cells"]["periodic-N500"].update(train={"every": 0.3, "reversals": 4},
