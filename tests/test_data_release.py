@@ -276,3 +276,26 @@ def test_release_of_what_is_not_a_finished_case_is_refused_and_writes_nothing(tm
                          cwd=ROOT, capture_output=True, text=True)
     assert run.returncode == 2 and words in run.stderr
     assert not (tmp_path / "data" / "x").exists()
+
+
+PAPER_VALIDATION = ROOT / "data" / "bulk-validation-paper"
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not PAPER_VALIDATION.is_dir(), reason="the paper-physics validation release is not in data/")
+def test_the_released_validation_cells_decide_the_narrow_cell_without_yade(workflow_dir, tmp_path):
+    """config/bulk_validation_paper.yaml with its release: the four cells are restored, not run (no DEM rule
+    in the plan), and the study's own tolerance rule finds the narrow cell H = 37d, W = 18.5d the W = 4H,
+    H = 24d wall cell's material at the paper's physics (docs/findings.md, "The narrow cell at the paper's physics")."""
+    from tests.helpers import counts, dry_run, snakemake
+    args = ["bulk_vs_walls", "--configfile", "config/bulk.yaml", "config/bulk_validation_paper.yaml",
+            "--config", f"results_dir={tmp_path / 'results'}", f"release={PAPER_VALIDATION}"]
+    plan = dry_run(*args, cwd=workflow_dir)
+    assert plan.returncode == 0, plan.stderr[-3000:]
+    c = counts(plan.stdout)
+    assert c.get("release_bulk_case") == 4 and not any(r.startswith("bulk_study_") and r != "bulk_study_cases"
+                                                       and r != "bulk_study_dem" for r in c), c
+    run = snakemake("-j1", *args, cwd=workflow_dir, timeout=600)
+    assert run.returncode == 0, run.stderr[-3000:]
+    table = pd.read_csv(tmp_path / "results" / "accuracy" / "bulk_vs_walls.csv").set_index("cell")
+    assert bool(table.loc["narrow-H37-W18", "match"]) and table.loc["W4H-H24", "seeds"] == 2
