@@ -26,7 +26,6 @@ from __future__ import annotations
 import datetime
 import gzip
 import hashlib
-import io
 import json
 import shutil
 import subprocess
