@@ -26,7 +26,7 @@ def released_scene_matches(label, folder, scene_of=case_scene):
 
 def released_bulk_cells():
     """Bulk-study case label -> release folder: released with its Heaviside reversal, from this config's scene."""
-    if not config["accuracy"]["bulk_vs_walls"]["run"]:
+    if not bulk_cells.enabled(config):
         return {}
     rows = bulk_cells.cases(config)
     heaviside = set(rows.loc[rows["stage"] == "heaviside", "case"])
