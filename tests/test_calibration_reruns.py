@@ -19,30 +19,21 @@ import yaml
 
 from dem_contract import synthetic
 from model import default_params
+from tests.helpers import TINY
 
 ROOT = Path(__file__).resolve().parents[1]
 SNAKEMAKE = [sys.executable, "-m", "snakemake"]
 GROUP = "p100000_I0.01"
 
 CONFIG = {
-    "campaign": "tiny",
-    "loading": {"pressures": [1.0e5], "inertial_numbers": [1.0e-2]},
+    **TINY,
     "seeds": [1, 2, 3],
-    "cell": {"H_over_d": 5, "W_over_H": 2},
-    "material": {"diameter": 1.0e-3, "density": 2500.0, "kappa": 1.0e3, "kt_over_kn": 0.5,
-                 "restitution": 0.5, "friction": 0.45, "size_ratio_min": 0.5, "size_ratio_max": 1.5},
-    "timestep": {"dt_over_tc": 0.1},
-    "pack": {"initial_solid_fraction": 0.4, "solid_fraction_guess": 0.8},
-    "preshear": {"strain": 0.2},
     "protocols": {"heaviside": {"strain": 0.5}, "sinusoidal": {"strain": 0.5, "transition_strain": 0.1}},
-    "sampling": {"fine_interval": 0.001, "fine_window": 0.05, "coarse_interval": 0.002, "bulk_exclusion_d": 1},
-    "run": {"checkpoint_every_s": 60, "progress_every_s": 10},
     "calibration": {
         "sets": {"heaviside_only": {"protocols": ["heaviside"]}},
         "options": "--bootstrap 2 --bootstrap-evals 20 --route2-evals 40 --profile-points 3 --profile-evals 10",
         "freeform": False,
     },
-    "accuracy": {"ode_work_precision": False},
 }
 
 pytestmark = pytest.mark.slow  # about a minute of calibration, then a dry run and a summary per edit

@@ -21,24 +21,11 @@ import pytest
 import yaml
 
 from campaign.results_lock import EXIT_BUSY, LOCK_NAME, STALE_S, ResultsBusy, ResultsLock
+from tests.helpers import TINY
 
 ROOT = Path(__file__).resolve().parents[1]
 SNAKEMAKE = [sys.executable, "-m", "snakemake"]
-CONFIG = {
-    "campaign": "tiny",
-    "loading": {"pressures": [1.0e5], "inertial_numbers": [1.0e-2]},
-    "seeds": [1, 2],
-    "cell": {"H_over_d": 5, "W_over_H": 2},
-    "material": {"diameter": 1.0e-3, "density": 2500.0, "kappa": 1.0e3, "kt_over_kn": 0.5,
-                 "restitution": 0.5, "friction": 0.45, "size_ratio_min": 0.5, "size_ratio_max": 1.5},
-    "timestep": {"dt_over_tc": 0.1},
-    "pack": {"initial_solid_fraction": 0.4, "solid_fraction_guess": 0.8},
-    "preshear": {"strain": 0.2},
-    "protocols": {"heaviside": {"strain": 0.05}},
-    "sampling": {"fine_interval": 0.001, "fine_window": 0.05, "coarse_interval": 0.002, "bulk_exclusion_d": 1},
-    "run": {"checkpoint_every_s": 60, "progress_every_s": 10},
-    "accuracy": {"ode_work_precision": False},
-}
+CONFIG = {key: value for key, value in TINY.items() if key != "calibration"}
 
 
 def dead_pid():

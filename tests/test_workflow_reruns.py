@@ -12,27 +12,10 @@ import pytest
 import yaml
 
 from tests.helpers import counts as job_counts
-from tests.helpers import dry_run, snakemake, workflow_copy
+from tests.helpers import TINY, dry_run, snakemake, workflow_copy
 
 DEM_RULES = {"scene", "dem_pack", "dem_preshear", "dem_reversal"}
 
-TINY = {
-    "campaign": "tiny",
-    "loading": {"pressures": [1.0e5], "inertial_numbers": [1.0e-2]},
-    "seeds": [1, 2],
-    "cell": {"H_over_d": 5, "W_over_H": 2},
-    "material": {"diameter": 1.0e-3, "density": 2500.0, "kappa": 1.0e3, "kt_over_kn": 0.5,
-                 "restitution": 0.5, "friction": 0.45, "size_ratio_min": 0.5, "size_ratio_max": 1.5},
-    "timestep": {"dt_over_tc": 0.1},
-    "pack": {"initial_solid_fraction": 0.4, "solid_fraction_guess": 0.8},
-    "preshear": {"strain": 0.2},
-    "protocols": {"heaviside": {"strain": 0.05}},
-    # 126 and 51 rows: calibrate's 50 per file (the pre-flight check asks for them)
-    "sampling": {"fine_interval": 0.001, "fine_window": 0.05, "coarse_interval": 0.002, "bulk_exclusion_d": 1},
-    "run": {"checkpoint_every_s": 60, "progress_every_s": 10},
-    "calibration": {"options": "--bootstrap 8"},
-    "accuracy": {"ode_work_precision": False},
-}
 CASES = ["p100000_I0.01_s1", "p100000_I0.01_s2"]
 
 
