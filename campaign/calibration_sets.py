@@ -34,7 +34,7 @@ def calibration_sets(config: dict, cases: dict) -> dict:
     """Calibration sets: name -> dict(cases=[labels], protocols=[...]).
 
     The default sets (``default_sets``) and those of ``calibration.sets``; a set
-    may restrict protocols and pick pressures / inertial numbers ("all" or a
+    may restrict protocols and pick pressures / inertial numbers / seeds ("all" or a
     missing key keeps every value of the campaign). A set that selects no case
     or no protocol is left out (``preflight`` rejects such a set before this).
     """
@@ -51,7 +51,10 @@ def calibration_sets(config: dict, cases: dict) -> dict:
 
 
 def selects(spec: dict, case: dict) -> bool:
-    """Whether the set ``spec`` takes ``case`` (its pressure and inertial number are listed, or "all")."""
+    """Whether the set ``spec`` takes ``case`` (its pressure, inertial number and seed are listed, or "all")."""
+    wanted_seeds = spec.get("seeds", "all")
+    if wanted_seeds != "all" and int(case["seed"]) not in {int(s) for s in wanted_seeds}:
+        return False
     for key, value in (("pressures", case["pressure"]), ("inertial_numbers", case["inertial_number"])):
         wanted = spec.get(key, "all")
         if wanted != "all" and not any(same_value(value, w) for w in wanted):

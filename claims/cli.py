@@ -22,7 +22,7 @@ from pathlib import Path
 
 from dem_contract import REVERSAL_PROTOCOLS, DEMInputError
 
-from . import inputs, plan, power, report, table
+from . import design, inputs, plan, power, report, table
 
 
 def build_parser():
@@ -72,9 +72,13 @@ def main(argv=None) -> int:
         report.forest_plot(tab, out / "paper_claims.png")
         pw, cost = power.power_table(inputs.runs(pred), args.dem, tab)
         power.with_unknown_costs(pw).to_csv(out / "power.csv", index=False, float_format="%.6g")
+        dsg = design.design_table(inputs.runs(pred), args.dem, args.protocols,
+                                  {c.label: c.steady["A_norm"] for c in dem_cases})
+        dsg.to_csv(out / "reversal_design.csv", index=False, float_format="%.6g")
         presets = [power.preset_from_config(*_preset(p), cost) for p in args.preset]
         section = report.markdown_section(tab, source=f"`{out / 'paper_claims.csv'}`")
         section += "\n" + report.power_section(pw, presets, power.campaign_preset(pw), power.fabric_noise_check(args.dem))
+        section += "\n" + report.design_section(dsg)
         (out / "README_section.md").write_text(section)
     except (DEMInputError, ValueError) as exc:
         print(f"claims: error: {exc}", file=sys.stderr)

@@ -10,6 +10,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from . import power as pw  # noqa: E402
+from .table import EARLY_A  # noqa: E402
 from .stats import VERDICTS, verdict_counts  # noqa: E402
 
 COLOURS = {"reproduced": "tab:green", "contradicted": "tab:red", "negligible": "tab:blue", "inconclusive": "0.45"}
@@ -154,4 +155,31 @@ def power_section(power, presets: list, campaign: dict, noise: dict) -> str:
                  "(positive) is reached as 'contradicted', not 'reproduced'. The s.d. is that of these data: "
                  "where the two models nearly coincide (a measured effect near 0) it understates the spread a "
                  "pole that acts brings (README, \"The paper's claims\").")
+    return "\n".join(lines) + "\n"
+
+
+def design_section(design) -> str:
+    """The README's reversal-design paragraph: claim 4's per-seed s.d., cost and information per core-hour per protocol.
+
+    Parameters
+    ----------
+    design : DataFrame
+        ``claims.design.design_table``.
+    """
+    lines = ["### The reversal design: information on claim 4 per core-hour", "",
+             "Per reversal protocol, over the seeds: claim 4's paired difference (RMSE of |A| over the first "
+             f"{EARLY_A:g} strain, Model 1 minus Model 2, out of sample) averaged over the protocol's reversals "
+             "of a seed; its s.d. over seeds (95 % chi-square interval); the CPU hours of a seed of that design "
+             "alone (packing, pre-shear, the protocol's run); information per core-hour 1/(s.d.^2 x hours), "
+             "relative to the best; the design effect (1: a seed's reversals as good as independent ones); |A| at "
+             "the reversal over the steady |A| (`reversal_design.csv`, `claims/design.py`).", "",
+             "| protocol | seeds | reversals per seed | mean difference [95 % t] | s.d. per seed [95 %] | "
+             "CPU h per seed | relative information | design effect | |A| at reversal / steady |",
+             "|---|---|---|---|---|---|---|---|---|"]
+    for _, r in design.iterrows():
+        lines.append(f"| {r['protocol']} | {r['seeds']} | {_num(r['reversals_per_seed'])} | {_num(r['mean_difference'])} "
+                     f"[{_num(r['mean_lo'])}, {_num(r['mean_hi'])}] | {_num(r['sd_per_seed'])} "
+                     f"[{_num(r['sd_lo'])}, {_num(r['sd_hi'])}] | {_num(r['cpu_hours_per_seed'])} | "
+                     f"{_num(r['relative_information'])} | {_num(r['design_effect'])} | "
+                     f"{_num(r['A_at_reversal_over_steady'])} |")
     return "\n".join(lines) + "\n"

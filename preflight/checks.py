@@ -324,6 +324,10 @@ def calibration_problems(config: dict) -> list[str]:
                 if not any(same_value(v, h) for h in have):
                     out.append(problem(f"{key}.{field}[{i}]", v, "is not in the campaign, so the set would "
                                        "silently lose it", ", ".join(format_number(h) for h in have)))
+        for i, seed in enumerate(spec.get("seeds") or []):
+            if seed not in config["seeds"]:
+                out.append(problem(f"{key}.seeds[{i}]", seed, "is not a seed of the campaign (seeds:), so the set "
+                                   "would silently lose it", ", ".join(str(s) for s in config["seeds"])))
         for i, p in enumerate(spec.get("protocols") or []):
             if p not in protocols:
                 out.append(problem(f"{key}.protocols[{i}]", p, "is not a protocol of the campaign (protocols:)",

@@ -80,6 +80,8 @@ CASES = {
     "calibration_set_unknown_inertial_number": (
         edited(calibration={"sets": {"slow": {"inertial_numbers": [1e-3]}}}),
         ["calibration.sets.slow.inertial_numbers[0]", "0.01"]),
+    "calibration_set_unknown_seed": (edited(calibration={"sets": {"odd": {"seeds": [1, 5]}}}),
+                                     ["calibration.sets.odd.seeds[1]", "1, 2, 3"]),
     "calibration_set_unknown_protocol": (
         replaced(protocols={"heaviside": {"strain": 0.4}}, calibration={"sets": {"s": {"protocols": ["sinusoidal"]}}}),
         ["calibration.sets.s.protocols[0]", "heaviside"]),
@@ -220,3 +222,16 @@ def test_config_file_that_cannot_be_read_is_named_with_its_line(tmp_path, text, 
 def test_config_folder_is_named():
     with pytest.raises(preflight.ConfigProblem, match="is a folder"):
         preflight.load_configfile(ROOT / "config")
+
+
+def test_sets_on_complementary_seeds_take_only_their_seeds():
+    from campaign.calibration_sets import calibration_sets
+    from campaign.cases import cases
+
+    config = copy.deepcopy(CI)
+    config["calibration"]["sets"] = {"odd": {"seeds": [1, 3]}, "even": {"seeds": [2]}}
+    table = cases(config)
+    built = calibration_sets(config, table)
+    seeds = {name: sorted(table[label]["seed"] for label in built[name]["cases"]) for name in ("odd", "even")}
+    assert seeds == {"odd": [1, 3], "even": [2]}
+    assert not set(built["odd"]["cases"]) & set(built["even"]["cases"])
