@@ -10,11 +10,13 @@
 #   options: extra options of `compare predict` (e.g. "--zoom 0.05")
 
 from campaign.scene_spec import protocol_segments
+from compare.cli import FIGURE_NAMES
 from dem_contract.derived import reversal_kinds
 
 COMPARE = f"{RESULTS}/compare"
-# reversal kind -> its figure: every reversal of that kind (a Heaviside step, a half cosine) of every protocol
-COMPARE_FIGURES = {"heaviside": "fig4_heaviside", "sinusoidal": "fig5_sinusoidal"}
+# reversal kind -> its figure's stem (one home: compare/cli.py's FIGURE_NAMES): every reversal of
+# that kind (a Heaviside step, a half cosine) of every protocol
+COMPARE_FIGURES = {kind: name.removesuffix(".png") for kind, name in FIGURE_NAMES.items()}
 
 
 def protocol_kinds(protocols):
