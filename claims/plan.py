@@ -47,7 +47,8 @@ from . import power
 
 EQUIVALENCE_ALPHA = 0.05    # each of the two one-sided tests
 COLUMNS = ["claim_id", "claim", "verdict", "estimate", "null", "margin", "sd", "seeds_now", "outcome",
-           "seeds_needed", "cases_to_add", "config_seeds_to_add", "core_hours", "seeds_sided", "sided_outcome",
+           "seeds_needed", "cases_to_add", "config_seeds_to_add", "core_hours", "wall_hours_2_cores",
+           "wall_hours_cluster", "seeds_sided", "sided_outcome",
            "seeds_negligible", "note"]
 
 
@@ -115,6 +116,22 @@ def _hours(cases: float, seed_cpu_s: float):
     return round(cases * seed_cpu_s / 3600.0, 4)
 
 
+def wall_hours(core_hours, seed_cpu_s: float, cores: int | None) -> float | str:
+    r"""Wall hours of the DEM that adds ``core_hours``: on ``cores`` one-thread jobs, or one core per case (None).
+
+    .. math:: T_{2} = C / 2, \qquad T_{\mathrm{cluster}} = c_{\mathrm{seed}}
+
+    (every case's chain packing -> pre-shear -> protocols on its own node through the Slurm profile:
+    the longest chain, one seed's CPU time ``seed_cpu_s``; its protocols run after one another here,
+    so this is an upper bound). ``core_hours``' own text (``unknown``, ``inf``) passes through.
+    """
+    if not isinstance(core_hours, (int, float)):
+        return core_hours
+    if core_hours == 0:
+        return 0.0
+    return round(core_hours / cores, 4) if cores else round(seed_cpu_s / 3600.0, 4)
+
+
 def plan_table(table: pd.DataFrame, seed_cpu_s: float, ensembles: int = 1) -> pd.DataFrame:
     """One row per inconclusive claim of ``table`` (``COLUMNS``).
 
@@ -155,7 +172,8 @@ def plan_table(table: pd.DataFrame, seed_cpu_s: float, ensembles: int = 1) -> pd
             seeds_needed=needed if not np.isfinite(needed) else int(needed),
             cases_to_add=add if not np.isfinite(add) else int(add),
             config_seeds_to_add=int(math.ceil(add / ensembles)) if np.isfinite(add) else add,
-            core_hours=_hours(add, seed_cpu_s), seeds_sided=sided, sided_outcome=sided_outcome,
+            core_hours=_hours(add, seed_cpu_s), wall_hours_2_cores=wall_hours(_hours(add, seed_cpu_s), seed_cpu_s, 2),
+            wall_hours_cluster=wall_hours(_hours(add, seed_cpu_s), seed_cpu_s, None), seeds_sided=sided, sided_outcome=sided_outcome,
             seeds_negligible=negl, note=note))
     return pd.DataFrame(rows, columns=COLUMNS)
 

@@ -54,12 +54,15 @@ def test_plan_lists_only_undecided_claims_with_the_cheaper_way_to_decide_them():
     assert p.loc["4", "cases_to_add"] == p.loc["4", "seeds_needed"] - 3
     assert p.loc["4", "config_seeds_to_add"] == math.ceil(p.loc["4", "cases_to_add"] / 2)
     assert p.loc["4", "core_hours"] == pytest.approx(p.loc["4", "cases_to_add"])       # one core-hour a case
+    assert p.loc["4", "wall_hours_2_cores"] == pytest.approx(p.loc["4", "core_hours"] / 2)
+    assert p.loc["4", "wall_hours_cluster"] == pytest.approx(1.0)                      # one case's chain
     assert p.loc["7", "outcome"] == "negligible" and p.loc["7", "seeds_needed"] == plan.seeds_tost(1.0, 0.05, 0.5)
     assert p.loc["7", "seeds_sided"] > p.loc["7", "seeds_needed"]
     assert p.loc["8", "outcome"] == "contradicted"
     assert p.loc["2b", "outcome"] == "unknown" and "no seed-to-seed s.d." in p.loc["2b", "note"]
     unknown = plan.plan_table(table, seed_cpu_s=float("nan")).set_index("claim_id")
     assert unknown.loc["4", "core_hours"] == "unknown"                  # a cost not measured is named, not NaN
+    assert unknown.loc["4", "wall_hours_2_cores"] == unknown.loc["4", "wall_hours_cluster"] == "unknown"
 
 
 @pytest.mark.parametrize("delta, margin, outcome", [(-0.5, float("nan"), "reproduced"), (0.0, 0.6, "negligible")])
