@@ -310,3 +310,26 @@ def test_the_comparison_scores_each_reversal_of_a_schedule_as_one_transient(two_
     # the model started from each transient's own initial state follows the model-made series
     assert seeds["status"].eq("ok").all()
     assert seeds.loc[seeds["protocol"] == "double_r2", "rmse_A_norm"].max() < 0.01
+
+
+@pytest.mark.yade
+def test_a_schedule_that_first_continues_the_pre_shear_runs_and_reverses_where_scheduled(tmp_path):
+    """A first segment in the pre-shear's direction (no reversal) runs, sampled finely from its start, and
+    the one reversal comes after it (this stage failed with KeyError 'fine_end' before its fix)."""
+    segments = [{"strain": 0.1, "direction": 1}, {"strain": 0.15, "direction": -1}]
+    scene = tmp_path / "scene.json"
+    scene.write_text(json.dumps(schedule_scene("walls", segments)))
+    cdir = tmp_path / "p100000_I0.01_s1"
+    for stage in ("pack", "preshear", "double"):
+        r = yade(RUN, scene, stage, cdir)
+        assert r.returncode == 0, f"{stage}: {r.stdout[-2000:]}\n{r.stderr[-2000:]}"
+    side = json.loads((cdir / "double.json").read_text())
+    assert [r["direction"] for r in side["reversals"]] == [-1]
+    I, step = side["inertial_number"], side["gammadot_nominal"] * side["dt"]
+    assert abs((side["reversals"][0]["t"] - side["t_start"]) * I - 0.1) <= step * 1.001
+    run = read(cdir / "double.csv")
+    dt_fine = side["sampling_steps"]["fine"] * side["dt"] / side["time_unit_s"]
+    assert np.allclose(np.diff(run["t"][:10]), dt_fine, rtol=1e-6)   # fine from the stage's start
+    assert run["gammadot"][0] > 0 > run["gammadot"][-1]
+    found = split_transients(read_series(cdir / "preshear.csv"), read_series(cdir / "double.csv"), side)
+    assert len(found) == 1 and found[0].sign == -1.0

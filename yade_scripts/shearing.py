@@ -69,6 +69,8 @@ class Shearing:
         st["n_steps"] = int(math.ceil(at * steps_per_strain))
         st["fine_window_steps"] = int(math.ceil(smp["fine_window"] * steps_per_strain))
         st["reversals"] = []
+        # fine sampling from the stage's start, as in the pre-shear (a first segment that reverses restarts it)
+        st["fine_end"] = O.iter + st["fine_window_steps"]
         self._enter_segment(0, at_start=True)
 
     def _next_boundary(self):
