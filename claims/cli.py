@@ -72,8 +72,7 @@ def main(argv=None) -> int:
         report.forest_plot(tab, out / "paper_claims.png")
         pw, cost = power.power_table(inputs.runs(pred), args.dem, tab)
         power.with_unknown_costs(pw).to_csv(out / "power.csv", index=False, float_format="%.6g")
-        dsg = design.design_table(inputs.runs(pred), args.dem, args.protocols,
-                                  {c.label: c.steady["A_norm"] for c in dem_cases})
+        dsg = design.design_table(inputs.runs(pred), args.dem, args.protocols)
         dsg.to_csv(out / "reversal_design.csv", index=False, float_format="%.6g")
         presets = [power.preset_from_config(*_preset(p), cost) for p in args.preset]
         section = report.markdown_section(tab, source=f"`{out / 'paper_claims.csv'}`")

@@ -28,9 +28,11 @@ one spaced 0.5, ...) measures every design on the same seeds. For each protocol
   reversals per seed (1: the reversals of a seed are as good as independent
   ones; :math:`k_p`: they repeat one another);
 - how far the fabric has recovered when each reversal starts: the mean over
-  reversals of :math:`|A|` at the reversal over the pre-shear's steady :math:`|A|`
-  (first sample of the DEM curve; a train spaced too closely starts its later
-  reversals from a fabric that has not regrown).
+  reversals of :math:`|A_0|/|A|_{ss}`, :math:`A_0` the fabric just before the
+  reversal (``dem_contract.split_transients``: over the last
+  ``PRE_REVERSAL_WINDOW`` strain of the leg before it) and :math:`|A|_{ss}` the
+  pre-shear's steady :math:`|A|` (a train spaced too closely starts its later
+  reversals from a fabric that has not regrown: a ratio below 1).
 
 A branching design (one long pre-shear, saved states every :math:`\Delta`
 strain, a single reversal of length :math:`L` from each) costs
@@ -42,10 +44,13 @@ from __future__ import annotations
 
 import math
 import re
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
 from scipy import stats
+
+from dem_contract import fabric_norm, read_series, read_sidecar, split_transients, steady_values
 
 from . import power, table
 
@@ -54,6 +59,7 @@ COLUMNS = ["protocol", "seeds", "reversals_per_seed", "mean_difference", "mean_l
            "information_per_core_hour", "relative_information", "A_at_reversal_over_steady"]
 
 _REVERSAL_SUFFIX = re.compile(r"_r\d+$")
+COLUMNS_READ = ("t", "strain", "gammadot", "A_xx", "A_xy", "mu")
 
 
 def base_protocol(key: str) -> str:
@@ -70,7 +76,22 @@ def sd_interval(sd: float, n: int, level: float = 0.95) -> tuple:
             sd * math.sqrt((n - 1) / stats.chi2.ppf(a, n - 1)))
 
 
-def design_table(runs: dict, case_dirs, protocols, steady_A: dict) -> pd.DataFrame:
+def recovery(case_dirs, protocol: str) -> float:
+    r"""Mean :math:`|A_0|/|A|_{ss}` over the reversals of ``protocol`` in every case (module docstring); NaN if none."""
+    ratios = []
+    for d in map(Path, case_dirs):
+        path = d / f"{protocol}.csv"
+        if not path.is_file():
+            continue
+        pre = read_series(d / "preshear.csv", COLUMNS_READ, 10, what="the pre-shear")
+        steady = steady_values(pre)["A_norm"]
+        for tr in split_transients(pre, read_series(path, COLUMNS_READ, 10, what=str(path)), read_sidecar(path),
+                                   what=str(path)):
+            ratios.append(float(fabric_norm(tr.initial["A_xx"], tr.initial["A_xy"])) / steady)
+    return float(np.mean(ratios)) if ratios else math.nan
+
+
+def design_table(runs: dict, case_dirs, protocols) -> pd.DataFrame:
     """One row per reversal protocol (``COLUMNS``), from the claims' runs and the DEM cases' sidecars.
 
     Parameters
@@ -81,8 +102,6 @@ def design_table(runs: dict, case_dirs, protocols, steady_A: dict) -> pd.DataFra
         The DEM cases (stage sidecars: CPU time per stage).
     protocols : list of str
         The campaign's reversal protocols.
-    steady_A : dict
-        Case label -> the pre-shear's steady |A| (``claims.inputs.DemCase.steady``).
     """
     rows = []
     for p in protocols:
@@ -100,14 +119,12 @@ def design_table(runs: dict, case_dirs, protocols, steady_A: dict) -> pd.DataFra
         half = (stats.t.ppf(0.975, v.size - 1) * sd / math.sqrt(v.size)) if v.size >= 2 else math.nan
         cost = power.dem_cost(case_dirs, [p])
         hours = (cost["setup_cpu_s"] + cost["transient_cpu_s"]) / 3600.0
-        recovered = [float(cur["dem"]["A_norm"].iloc[0] / steady_A[key[1]]) for key, cur in pairs
-                     if key[1] in steady_A]
         rows.append(dict(
             protocol=p, seeds=int(v.size), reversals_per_seed=k, mean_difference=mean, mean_lo=mean - half,
             mean_hi=mean + half, sd_per_seed=sd, sd_lo=lo, sd_hi=hi, sd_single_reversal=sd1,
             design_effect=sd ** 2 / (sd1 ** 2 / k) if v.size and sd1 > 0 else math.nan,
             cpu_hours_per_seed=hours, information_per_core_hour=1.0 / (sd ** 2 * hours) if sd > 0 else math.nan,
-            A_at_reversal_over_steady=float(np.mean(recovered)) if recovered else math.nan))
+            A_at_reversal_over_steady=recovery(case_dirs, p)))
     out = pd.DataFrame(rows, columns=COLUMNS)
     best = out["information_per_core_hour"].max()
     out["relative_information"] = out["information_per_core_hour"] / best if np.isfinite(best) else math.nan

@@ -35,6 +35,9 @@ def build_parser() -> argparse.ArgumentParser:
                      help="the campaign's config file(s) as run, in the order of --configfile")
     rel.add_argument("--out", required=True, help="the release folder to write, e.g. data/<campaign>")
     rel.add_argument("--states", action="store_true", help="also release each case's preshear.final.yade.gz")
+    rel.add_argument("--published", nargs="+", default=[], metavar="TABLE",
+                     help="tables the campaign's run wrote from these cases (e.g. <results>/claims/paper_claims.csv), "
+                          "kept in published/ to compare a recomputation with")
     ver = sub.add_parser("verify", help="check releases' checksums and read every released case back")
     ver.add_argument("releases", nargs="+", help="release folders, e.g. data/*/")
     res = sub.add_parser("restore", help="one released case -> <out> as a finished DEM case")
@@ -54,8 +57,11 @@ def run(args) -> int:
         command = "python -m dem_contract release " + shlex.join(sys.argv[2:] if sys.argv[1:2] == ["release"]
                                                                  else ["--cases", *args.cases, "--config",
                                                                        *args.config, "--out", args.out]
-                                                                 + (["--states"] if args.states else []))
-        out = release.make_release(args.cases, args.out, args.config, command, args.states)
+                                                                 + (["--states"] if args.states else [])
+                                                                 + (["--published", *args.published]
+                                                                    if args.published else []))
+        out = release.make_release(args.cases, args.out, args.config, command, args.states,
+                                   published=args.published)
         manifest = release.read_manifest(out)
         print(f"dem_contract release: {len(manifest['cases'])} case(s) in {out}, "
               f"{manifest['total_bytes'] / 1e6:.3f} MB; all releases beside it: "

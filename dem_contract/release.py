@@ -42,6 +42,7 @@ from .series import CONTRACT_COLUMNS, DEMInputError, read_series, read_sidecar
 #: The manifest's file name, and the release's layout.
 MANIFEST = "manifest.yaml"
 CASES_DIR = "cases"
+PUBLISHED_DIR = "published"      # the campaign's own tables, for comparison with a recomputation
 STATE = "preshear.final.yade.gz"
 #: Stages whose sidecars every case has before its reversal runs.
 BASE_STAGES = ("pack", "preshear")
@@ -166,7 +167,8 @@ def _release_case(case_dir: Path, out: Path, with_state: bool) -> dict:
             "cpu_time_s": sum(c.get("cpu_time_s", 0.0) for c in costs.values())}
 
 
-def make_release(case_dirs, out, config, command: str, with_states: bool = False, repo=None) -> Path:
+def make_release(case_dirs, out, config, command: str, with_states: bool = False, repo=None,
+                 published=()) -> Path:
     """Write a data release of finished DEM cases into ``out`` (a new or empty folder).
 
     Parameters
@@ -184,6 +186,10 @@ def make_release(case_dirs, out, config, command: str, with_states: bool = False
         Also release each case's pre-shear final state (``preshear.final.yade.gz``).
     repo : str or Path, optional
         The repository whose commit is recorded (default: this package's).
+    published : sequence of str or Path
+        Tables the campaign's own run wrote from these cases (for instance its
+        ``claims/paper_claims.csv``), copied to ``published/<file name>`` and checksummed
+        like the data, so that a recomputation from the release can be compared with them.
 
     Returns
     -------
@@ -214,6 +220,13 @@ def make_release(case_dirs, out, config, command: str, with_states: bool = False
     try:
         for path, name in zip(configs, names):
             shutil.copyfile(path, out / name)
+        tables = {}
+        for path in map(Path, published):
+            if path.name in tables:
+                raise DEMInputError(f"{path}: a published table named {path.name} is given twice")
+            (out / PUBLISHED_DIR).mkdir(exist_ok=True)
+            shutil.copyfile(path, out / PUBLISHED_DIR / path.name)
+            tables[path.name] = str(path)
         cases = {case_dir.name: {"source": source,
                                  **_release_case(case_dir, out / CASES_DIR / case_dir.name, with_states)}
                  for case_dir, source in sources.items()}
@@ -240,6 +253,7 @@ def make_release(case_dirs, out, config, command: str, with_states: bool = False
             "release": command,
         },
         "cases": cases,
+        **({"published": tables} if tables else {}),
         "config": cfg,
         "files": files,
         "total_bytes": sum(f["bytes"] for f in files.values()),

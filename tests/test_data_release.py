@@ -75,7 +75,8 @@ def released(tmp_path_factory):
     out = tmp / "data" / "tiny"
     made = subprocess.run([sys.executable, "-m", "dem_contract", "release", "--cases",
                            *sorted(map(str, (results / "dem").glob("p*"))), "--config", str(config), "--out", str(out),
-                           "--states"], cwd=ROOT, capture_output=True, text=True, timeout=300)
+                           "--states", "--published", str(results / "claims" / "paper_claims.csv")],
+                          cwd=ROOT, capture_output=True, text=True, timeout=300)
     assert made.returncode == 0, made.stderr
     assert "budget 20 MB" in made.stdout
     return config, results, out
@@ -157,6 +158,8 @@ def test_release_manifest_names_provenance_and_every_file(released):
             assert f"cases/{label}/{name}" in manifest["files"]
         assert manifest["cases"][label]["cpu_time_s"] > 0 and manifest["cases"][label]["N"] == 56
     assert manifest["total_bytes"] == sum(f["bytes"] for f in manifest["files"].values())
+    assert manifest["published"] == {"paper_claims.csv": str(results / "claims" / "paper_claims.csv")}
+    assert "published/paper_claims.csv" in manifest["files"]
 
 
 @pytest.mark.yade
@@ -216,6 +219,7 @@ def test_claims_recomputed_from_the_release_alone_are_byte_identical(released, t
     assert "rule release_case:" in ran and not any(f"rule {r}:" in ran for r in DEM_RULES)
     for name in ("paper_claims.csv", "power.csv"):
         assert filecmp.cmp(fresh / "claims" / name, results / "claims" / name, shallow=False), name
+    assert filecmp.cmp(fresh / "claims" / "paper_claims.csv", out / "published" / "paper_claims.csv", shallow=False)
 
 
 @pytest.mark.yade
