@@ -303,3 +303,35 @@ def test_the_released_validation_cells_decide_the_narrow_cell_without_yade(workf
     assert run.returncode == 0, run.stderr[-3000:]
     table = pd.read_csv(tmp_path / "results" / "accuracy" / "bulk_vs_walls.csv").set_index("cell")
     assert bool(table.loc["narrow-H37-W18", "match"]) and table.loc["W4H-H24", "seeds"] == 2
+
+
+DECIDE = ROOT / "data" / "bulk-decide"
+RUN_RELEASE_CLAIMS = os.environ.get("RUN_RELEASE_CLAIMS") == "1"
+
+
+@pytest.mark.skipif(not DECIDE.is_dir(), reason="the deciding campaign's release is not in data/")
+def test_the_deciding_preset_takes_every_case_from_its_release(workflow_dir, tmp_path):
+    """config/bulk_decide.yaml names data/bulk-decide: its dry run restores every case and plans no DEM job."""
+    from tests.helpers import counts, dry_run
+    plan = dry_run("--configfile", "config/bulk_decide.yaml", "--config", f"results_dir={tmp_path / 'results'}",
+                   cwd=workflow_dir)
+    assert plan.returncode == 0, plan.stderr[-3000:]
+    c = counts(plan.stdout)
+    seeds = yaml.safe_load((ROOT / "config" / "bulk_decide.yaml").read_text())["seeds"]
+    assert c.get("release_case") == len(seeds) and not any(c.get(r) for r in DEM_RULES), c
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not (DECIDE.is_dir() and RUN_RELEASE_CLAIMS),
+                    reason="opt-in: RUN_RELEASE_CLAIMS=1 (calibrates the deciding campaign from its release, minutes)")
+def test_the_deciding_campaign_recomputed_from_its_release_gives_its_published_claims(workflow_dir, tmp_path):
+    """26.4a on the committed release: calibration, comparison and claims from data/bulk-decide alone (no YADE)
+    write the claims table and the reversal-design table the campaign published, byte for byte."""
+    from tests.helpers import snakemake as snakemake_in
+    results = tmp_path / "results"
+    run = snakemake_in("-j2", results / "claims" / "paper_claims.csv", "--configfile", "config/bulk_decide.yaml",
+                       "--config", f"results_dir={results}", cwd=workflow_dir, timeout=None)
+    assert run.returncode == 0, run.stderr[-3000:]
+    assert not any(f"rule {r}:" in run.stderr + run.stdout for r in DEM_RULES)
+    for name in ("paper_claims.csv", "reversal_design.csv"):
+        assert filecmp.cmp(results / "claims" / name, DECIDE / "published" / name, shallow=False), name
