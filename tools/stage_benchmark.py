@@ -34,7 +34,8 @@ of CPU (time.process_time) and its share of the run's wall time.
 
 The cost of a run chunk alone: ``bare <scene> <case> <out.json> --timing --chunks K [--wait
 fine]`` runs the same steps as K calls of O.run (YADE's wait, which sleeps 40 ms between
-looks, or a look every millisecond) and writes the engines' time and the rest of O.run.
+looks, or a sleep through 90 % of the predicted time, then a look every millisecond) and
+writes the engines' time and the rest of O.run.
 """
 import argparse
 import csv
@@ -265,15 +266,21 @@ def engine_seconds(O, pyrunners):
     return 1e-9 * sum(e.execTime for e in O.engines if isinstance(e, PyRunner) == pyrunners)
 
 
-def run_and_wait(O, n, how):
+def run_and_wait(O, n, how, rate={}):
     """O.run(n, True) (how = "yade": YADE's wait, which sleeps 40 ms between looks), or
-    O.run(n) then a look at O.running every millisecond (how = "fine")."""
+    O.run(n), a sleep through 90 % of the time the last chunk's rate predicts (less than all
+    of it: a rate measured after an oversleep would predict ever longer chunks), then a look at
+    O.running every millisecond (how = "fine")."""
     if how == "yade":
         O.run(n, True)
         return
+    i0, t0 = O.iter, time.perf_counter()
     O.run(n)
+    if rate.get("steps_per_s"):
+        time.sleep(0.9 * n / rate["steps_per_s"])
     while O.running:
         time.sleep(0.001)
+    rate["steps_per_s"] = (O.iter - i0) / max(1e-6, time.perf_counter() - t0)
 
 
 def untimed_run(O, parts, how="yade"):
@@ -309,8 +316,8 @@ def bare(argv):
     ap.add_argument("--timing", action="store_true")
     ap.add_argument("--chunks", type=int, default=1, help="the n steps as this many equal O.run calls")
     ap.add_argument("--wait", choices=["yade", "fine"], default="yade",
-                    help="yade: O.run(k, True), whose wait polls every 40 ms; fine: O.run(k), then look at "
-                         "O.running every ms")
+                    help="yade: O.run(k, True), whose wait polls every 40 ms; fine: O.run(k), a sleep through "
+                         "90%% of the predicted time, then a look at O.running every ms")
     args = ap.parse_args(argv)
     _import_yade()
     parts = Parts()
