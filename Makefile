@@ -33,9 +33,10 @@ paper: setup
 
 # Benchmarks of the code's own speed, in no preset's study: the batched integrator against a
 # loop of model.simulate (about a minute) and every calibration set of the quick campaign with
-# the per-run and the batched integrator (about 11 minutes of one core); the quick campaign's
-# DEM and calibration run first where results/ lacks them.
-BENCH := results/accuracy/batched_cost.csv results/accuracy/calibration_cost.csv
+# the per-run and the batched integrator (about 11 minutes of one core), and the DEM stage
+# against bare YADE (4 paired runs of a 338-disk pre-shear, about 5 minutes of one core); the
+# quick campaign's DEM and calibration run first where results/ lacks them.
+BENCH := results/accuracy/batched_cost.csv results/accuracy/calibration_cost.csv results/accuracy/stage_overhead.csv
 bench: setup
 	$(VENV)/bin/snakemake -j2 $(BENCH) --configfile config/quick.yaml
 

@@ -1,9 +1,10 @@
 """The quick preset runs the study, not benchmarks of the code's own speed; `make bench` runs those.
 
-A benchmark of the code is a rule whose command runs a ``*benchmark*`` module (the batched
-integrator against a loop, every calibration set with two integrators): it measures the code,
-not the physics. The quick preset's dry run (in a working copy of its own) must plan none of
-them and every part of the study; the Makefile's ``bench`` command must plan all of them.
+A benchmark of the code is a rule whose command runs a ``*benchmark*`` module or tools/ script
+(the batched integrator against a loop, every calibration set with two integrators, the DEM
+stage against bare YADE): it measures the code, not the physics. The quick preset's dry run (in
+a working copy of its own) must plan none of them and every part of the study; the Makefile's
+``bench`` command must plan all of them.
 """
 import re
 import shlex
@@ -20,7 +21,7 @@ STUDY = {"dem_pack", "dem_preshear", "dem_reversal", "calibrate", "compare_predi
 
 @pytest.fixture(scope="module")
 def code_benchmarks(module_workflow_dir):
-    """Rule names whose shell command runs a module named ``*benchmark*``."""
+    """Rule names whose shell command runs a module or a tools/ script named ``*benchmark*``."""
     from snakemake.api import SnakemakeApi
     from snakemake.settings.types import ConfigSettings, OutputSettings, ResourceSettings, StorageSettings
 
@@ -30,8 +31,8 @@ def code_benchmarks(module_workflow_dir):
             config_settings=ConfigSettings(configfiles=[module_workflow_dir / "config" / "quick.yaml"]),
             snakefile=module_workflow_dir / "Snakefile", workdir=module_workflow_dir)
         names = {rule.name for rule in workflow._workflow.rules
-                 if rule.shellcmd and re.search(r"-m \w+(\.\w+)*benchmark\b", rule.shellcmd)}
-    assert {"batched_cost", "calibration_cost"} <= names, names  # else the definition found nothing
+                 if rule.shellcmd and re.search(r"-m \w+(\.\w+)*benchmark\b|tools/\w*benchmark\.py\b", rule.shellcmd)}
+    assert {"batched_cost", "calibration_cost", "stage_overhead"} <= names, names  # else the definition found nothing
     return names
 
 

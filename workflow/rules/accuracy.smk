@@ -3,6 +3,7 @@
 # on: seconds), the batched integrator's and the calibration's cost. The DEM
 # resolution study is dem_study.smk, the bulk-against-walls study bulk_study.smk;
 # accuracy_targets() gathers all three.
+import json
 
 
 rule ode_work_precision:
@@ -75,6 +76,30 @@ rule calibration_cost:
     shell:
         "OMP_NUM_THREADS=1 {PY} -m calibrate.cost_benchmark --results {RESULTS} --out {RESULTS}/accuracy"
         " {params.protocol_sets} > {log} 2>&1"
+
+
+# The DEM stage against bare YADE (tools/stage_benchmark.py): paired runs of one pre-shear of a
+# small cell (338 disks) from one packing, with the preset's sampling and run settings; run by
+# `make bench` only (no preset's default target: a benchmark of the code, not of the study).
+rule stage_overhead:
+    output:
+        table=f"{RESULTS}/accuracy/stage_overhead.csv",
+        summary=f"{RESULTS}/accuracy/stage_overhead_summary.csv",
+        wall=f"{RESULTS}/accuracy/stage_overhead_wall.csv",
+    params:
+        sampling=lambda wc: json.dumps(config["sampling"]),
+        run=lambda wc: json.dumps(config["run"]),
+    resources:
+        runtime=COST_STAGE_OVERHEAD.runtime,
+        mem_mb=COST_STAGE_OVERHEAD.mem_mb,
+    log:
+        f"{RESULTS}/logs/accuracy/stage_overhead.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/accuracy/stage_overhead.tsv"
+    threads: 1
+    shell:
+        "OMP_NUM_THREADS=1 YADE_LAUNCHER={YADE} python3 tools/stage_benchmark.py --out {output.table}"
+        " --sampling {params.sampling:q} --run {params.run:q} > {log} 2>&1"
 
 
 rule packing_cost:
