@@ -241,7 +241,9 @@ def test_command_line_writes_the_table_the_figure_and_the_readme_section(model1_
     table = pd.read_csv(tmp_path / "claims" / "paper_claims.csv")
     assert len(table) == 10 and table.loc[table["claim_id"] == "2b", "n"].item() == 4   # Eq. 2 read this time
     section = (tmp_path / "claims" / "README_section.md").read_text()
-    assert section.count("\n| ") == 1 + len(table) and "**reproduced**" in section
+    claims_part = section.split("\n### ")[0]        # the power and reversal-design tables follow it
+    assert claims_part.count("\n| ") == 1 + len(table) and "**reproduced**" in section
+    assert "### The reversal design" in section
     assert (tmp_path / "claims" / "paper_claims.png").stat().st_size > 10_000
 
 
