@@ -105,6 +105,7 @@ for dem_chain in DEM_CHAINS:
             params:
                 stage=dem_stage or protocol_stage,
                 case_dir=stage_case_dir(dem_chain),
+            priority: dem_priority(dem_stage)
             resources:
                 runtime=dem_runtime(dem_stage),
                 mem_mb=dem_mem_mb,
