@@ -82,9 +82,10 @@ def test_the_quick_preset_runs_the_dem_longest_chain_first_then_the_largest_cali
     result = dry_run("--configfile", "config/quick.yaml", cwd=workflow_dir, quiet=False)
     assert result.returncode == 0, result.stderr[-3000:]
     prio = planned_priorities(result.stdout)
-    dem = {k: v for k, v in prio.items() if k[0] in ("dem_pack", "dem_preshear", "dem_reversal")}
+    dem = {k: v for k, v in prio.items() if k[0] in ("scene", "dem_pack", "dem_preshear", "dem_reversal")}
     rest = {k: v for k, v in prio.items() if k not in dem}
-    assert len(dem) == 24 and min(dem.values()) > max(rest.values()), (dem, rest)
+    assert len(dem) == 30 and min(dem.values()) > max(rest.values()), (dem, rest)
+    assert prio[("scene", "case=p100000_I0.002_s1")] > prio[("scene", "case=p100000_I0.005_s1")]
     assert prio[("dem_preshear", "case=p100000_I0.002_s1")] > prio[("dem_preshear", "case=p100000_I0.005_s1")]
     assert prio[("dem_pack", "case=p100000_I0.002_s1")] > prio[("dem_preshear", "case=p100000_I0.002_s1")]
     sets = {k[1].split("=")[1]: v for k, v in prio.items() if k[0] == "calibrate"}

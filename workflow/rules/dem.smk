@@ -83,6 +83,7 @@ for dem_chain in DEM_CHAINS:
             f"{RESULTS}/logs/{dem_where}/scene.log",
         benchmark:
             f"{RESULTS}/benchmarks/{dem_where}/scene.tsv"
+        priority: dem_priority("scene")
         localrule: True
         run:
             write_scene(scene_of_result_key(params.result, config), output[0], log[0])

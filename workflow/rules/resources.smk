@@ -78,15 +78,22 @@ DEM_PRIORITY = 1000
 
 
 def dem_priority(stage=None):
-    """A priority function: DEM_PRIORITY + projected seconds of the stage and of the case's stages after it."""
+    """A priority function: DEM_PRIORITY + projected seconds of the stage and of the case's stages after it.
+
+    The scene (written in no time) gets its case's whole chain: at the start only scenes are ready, and
+    a scene left at priority 0 would wait behind the first case's pack, pre-shear and reversals.
+    """
 
     def priority(wc):
         name = stage or wc.protocol
         scene = _scene_of(wc)
         reversals = [k for k in scene if k in PROTOCOLS] + list(scene.get("schedules", {}))
         longest_reversal = max((dem_seconds(scene, r) for r in reversals), default=0.0)
-        after = {"pack": dem_seconds(scene, "preshear") + longest_reversal, "preshear": longest_reversal}
-        return DEM_PRIORITY + round(dem_seconds(scene, name) + after.get(name, 0.0))
+        after = {"preshear": longest_reversal}
+        after["pack"] = dem_seconds(scene, "preshear") + after["preshear"]
+        after["scene"] = dem_seconds(scene, "pack") + after["pack"]
+        own = 0.0 if name == "scene" else dem_seconds(scene, name)
+        return DEM_PRIORITY + round(own + after.get(name, 0.0))
 
     return priority
 
