@@ -60,3 +60,34 @@ def test_make_bench_plans_every_benchmark_of_the_code(code_benchmarks, workflow_
     result = dry_run(*[a for a in args if a != "-j2"], cwd=workflow_dir)
     assert result.returncode == 0, result.stderr[-3000:]
     assert code_benchmarks <= set(counts(result.stdout)), counts(result.stdout)
+
+
+def planned_priorities(stdout):
+    """(rule, wildcards) -> priority, from a verbose dry run's job blocks (a job without a priority: 0)."""
+    jobs = []
+    for line in stdout.splitlines():
+        head = re.match(r"^(?:local)?rule (\w+):", line)
+        if head:
+            jobs.append([head.group(1), "", 0])
+        elif jobs and line.strip().startswith("wildcards:"):
+            jobs[-1][1] = line.split(":", 1)[1].strip()
+        elif jobs and line.strip().startswith("priority:"):
+            jobs[-1][2] = int(float(line.split(":", 1)[1]))
+    return {(rule, wildcards): priority for rule, wildcards, priority in jobs}
+
+
+def test_the_quick_preset_runs_the_dem_longest_chain_first_then_the_largest_calibration_set(workflow_dir):
+    """On 2 cores no long job should end the study alone: the DEM (it gates every set but the per-I
+    ones) before anything else, the I = 2e-3 chains before the 3 times cheaper I = 5e-3 ones, then
+    the set "all" (the largest) before the others."""
+    result = dry_run("--configfile", "config/quick.yaml", cwd=workflow_dir, quiet=False)
+    assert result.returncode == 0, result.stderr[-3000:]
+    prio = planned_priorities(result.stdout)
+    dem = {k: v for k, v in prio.items() if k[0] in ("scene", "dem_pack", "dem_preshear", "dem_reversal")}
+    rest = {k: v for k, v in prio.items() if k not in dem}
+    assert len(dem) == 30 and min(dem.values()) > max(rest.values()), (dem, rest)
+    assert prio[("scene", "case=p100000_I0.002_s1")] > prio[("scene", "case=p100000_I0.005_s1")]
+    assert prio[("dem_preshear", "case=p100000_I0.002_s1")] > prio[("dem_preshear", "case=p100000_I0.005_s1")]
+    assert prio[("dem_pack", "case=p100000_I0.002_s1")] > prio[("dem_preshear", "case=p100000_I0.002_s1")]
+    sets = {k[1].split("=")[1]: v for k, v in prio.items() if k[0] == "calibrate"}
+    assert max(sets, key=sets.get) == "all" and sets["heaviside_only"] > sets["I0.005"], sets

@@ -96,6 +96,7 @@ rule calibrate:
         options=config.get("calibration", {}).get("options", ""),
         freeform="--freeform" if CALIBRATION_FREEFORM else "",
         out=lambda wc: f"{RESULTS}/calibration/{wc.calset}",
+    priority: set_priority
     resources:
         runtime=COST_CALIBRATE.runtime,
         mem_mb=COST_CALIBRATE.mem_mb,

@@ -83,6 +83,7 @@ for dem_chain in DEM_CHAINS:
             f"{RESULTS}/logs/{dem_where}/scene.log",
         benchmark:
             f"{RESULTS}/benchmarks/{dem_where}/scene.tsv"
+        priority: dem_priority("scene")
         localrule: True
         run:
             write_scene(scene_of_result_key(params.result, config), output[0], log[0])
@@ -105,6 +106,7 @@ for dem_chain in DEM_CHAINS:
             params:
                 stage=dem_stage or protocol_stage,
                 case_dir=stage_case_dir(dem_chain),
+            priority: dem_priority(dem_stage)
             resources:
                 runtime=dem_runtime(dem_stage),
                 mem_mb=dem_mem_mb,

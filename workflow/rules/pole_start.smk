@@ -32,6 +32,7 @@ rule pole_start_calibrate:
         protocols=lambda wc: CALIBRATION_SETS[wc.calset]["protocols"],
         evals=_pole_option("route2-evals", 300),
         points=_pole_option("profile-points", 10),
+    priority: set_priority
     resources:
         runtime=COST_CALIBRATE.runtime,
         mem_mb=COST_CALIBRATE.mem_mb,

@@ -67,6 +67,43 @@ def dem_runtime(stage=None):
     return runtime
 
 
+# Scheduling on few cores (`make quick` runs -j2): of the ready jobs Snakemake starts those of
+# highest priority first (rules without one: 0). Every DEM stage outranks the rest, because every
+# calibration set but the per-I ones waits for the whole DEM; among them the longest remaining
+# chain of its case goes first (longest processing time first, the projected seconds of the stage
+# and of the stages after it), so no lone I = 2e-3 pre-shear ends the DEM. The calibration sets
+# then go largest first (set_priority): "all" with its pole-at-start fit is the longest chain
+# after the DEM, and started first it leaves the second core to the other sets.
+DEM_PRIORITY = 1000
+
+
+def dem_priority(stage=None):
+    """A priority function: DEM_PRIORITY + projected seconds of the stage and of the case's stages after it.
+
+    The scene (written in no time) gets its case's whole chain: at the start only scenes are ready, and
+    a scene left at priority 0 would wait behind the first case's pack, pre-shear and reversals.
+    """
+
+    def priority(wc):
+        name = stage or wc.protocol
+        scene = _scene_of(wc)
+        reversals = [k for k in scene if k in PROTOCOLS] + list(scene.get("schedules", {}))
+        longest_reversal = max((dem_seconds(scene, r) for r in reversals), default=0.0)
+        after = {"preshear": longest_reversal}
+        after["pack"] = dem_seconds(scene, "preshear") + after["preshear"]
+        after["scene"] = dem_seconds(scene, "pack") + after["pack"]
+        own = 0.0 if name == "scene" else dem_seconds(scene, name)
+        return DEM_PRIORITY + round(own + after.get(name, 0.0))
+
+    return priority
+
+
+def set_priority(wc):
+    """A calibration set's priority: its series (cases x (pre-shear + protocols)), the largest set first."""
+    spec = CALIBRATION_SETS[wc.calset]
+    return len(spec["cases"]) * (1 + len(spec["protocols"]))
+
+
 def dem_mem_mb(wc):
     scene = _scene_of(wc)
     mat, geo = scene["material"], scene["geometry"]
