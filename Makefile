@@ -5,7 +5,7 @@ VENV  := .venv
 PY    := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
 
-.PHONY: setup yade venv quick paper bench test slurm-test lint clean
+.PHONY: setup yade venv quick paper bench test test-all slurm-test lint clean
 
 setup: yade venv
 
@@ -41,12 +41,16 @@ bench: setup
 	$(VENV)/bin/snakemake -j2 $(BENCH) --configfile config/quick.yaml
 
 # The suite on both cores (pytest-xdist, one test file per worker so that a module's fixture
-# runs once), then the tests marked serial (a Slurm daemon, signal timing) alone.
+# runs once), then the tests marked serial (a Slurm daemon, signal timing) alone. The tests
+# marked heavy (end-to-end tiny studies and releases, coverage studies) run in test-all.
 # On one core, without xdist: $(PY) -m pytest -q -p no:xdist
 test: setup
 	$(VENV)/bin/lint-imports --no-cache
-	$(PY) -m pytest -q -n 2 --dist loadfile -m "not serial"
-	$(PY) -m pytest -q -p no:xdist -m serial
+	$(PY) -m pytest -q -n 2 --dist loadfile -m "not serial and not heavy"
+	$(PY) -m pytest -q -p no:xdist -m "serial and not heavy"
+
+test-all: test
+	$(PY) -m pytest -q -n 2 --dist loadfile -m "heavy"
 
 # The CI preset through profiles/slurm on a one-node Slurm started here (root;
 # workflow/scripts/slurm_local.sh up/down; about 10 minutes).

@@ -163,6 +163,7 @@ def test_estimate_grows_with_disks_and_lists_every_case(tmp_path):
 @pytest.mark.yade
 @pytest.mark.slow
 @pytest.mark.skipif(shutil.which("yade") is None, reason="needs YADE (Debian package yade)")
+@pytest.mark.heavy
 def test_tiny_study_runs_end_to_end_through_snakemake(tmp_path, workflow_dir):
     """Two real ~100-disk cells (walls and periodic) x two seeds, to the table and the figure."""
     config = yaml.safe_load((ROOT / "config" / "ci.yaml").read_text())

@@ -192,6 +192,7 @@ def test_claims_table_gets_the_upper_bound_and_pole_rows_from_freeform_csv(model
     assert table.freeform_rows(freeform.note_table("one seed")) == []
 
 
+@pytest.mark.heavy
 def test_calibrate_freeform_option_writes_freeform_csv_and_draws_it_on_fig3(tmp_path):
     from calibrate.__main__ import main
 

@@ -141,6 +141,7 @@ def run_coverage(n):
 
 
 @pytest.mark.slow
+@pytest.mark.heavy
 def test_reported_intervals_cover_the_truth_on_a_few_realisations():
     tab, _ = run_coverage(2)
     # 12 trials: P(>= 10 covered) = 0.98 at the nominal 95 %, 0.08 at a coverage of 60 %

@@ -143,6 +143,7 @@ def test_importer_names_a_reversal_time_with_no_row_and_a_truncated_gzip_file(tm
 
 @pytest.mark.yade
 @pytest.mark.slow
+@pytest.mark.heavy
 def test_release_manifest_names_provenance_and_every_file(released):
     config, results, out = released
     manifest = release.read_manifest(out)
@@ -164,6 +165,7 @@ def test_release_manifest_names_provenance_and_every_file(released):
 
 @pytest.mark.yade
 @pytest.mark.slow
+@pytest.mark.heavy
 def test_release_verifies_and_names_an_edited_or_added_file(released, tmp_path):
     _, _, out = released
     assert release.verify(out) == []
@@ -182,6 +184,7 @@ def test_release_verifies_and_names_an_edited_or_added_file(released, tmp_path):
 
 @pytest.mark.yade
 @pytest.mark.slow
+@pytest.mark.heavy
 def test_restored_case_equals_the_dem_it_was_released_from(released, tmp_path):
     """Series value for value (all 17 contract columns), sidecars and scene byte for byte, the state copied."""
     _, results, out = released
@@ -198,6 +201,7 @@ def test_restored_case_equals_the_dem_it_was_released_from(released, tmp_path):
 
 @pytest.mark.yade
 @pytest.mark.slow
+@pytest.mark.heavy
 def test_release_into_a_non_empty_folder_is_refused(released):
     config, results, out = released
     again = subprocess.run([sys.executable, "-m", "dem_contract", "release", "--cases", str(results / "dem" /
@@ -208,6 +212,7 @@ def test_release_into_a_non_empty_folder_is_refused(released):
 
 @pytest.mark.yade
 @pytest.mark.slow
+@pytest.mark.heavy
 def test_claims_recomputed_from_the_release_alone_are_byte_identical(released, tmp_path):
     """26.4a: no YADE job runs, and paper_claims.csv and power.csv equal the original campaign's byte for byte."""
     _, results, out = released
@@ -224,6 +229,7 @@ def test_claims_recomputed_from_the_release_alone_are_byte_identical(released, t
 
 @pytest.mark.yade
 @pytest.mark.slow
+@pytest.mark.heavy
 def test_adding_a_seed_plans_only_the_new_seeds_dem(released, tmp_path):
     """26.3/26.4b: with seeds 1-3 released and seed 4 added, the dry run's DEM jobs are seed 4's alone."""
     _, _, out = released
@@ -244,6 +250,7 @@ def test_adding_a_seed_plans_only_the_new_seeds_dem(released, tmp_path):
 @pytest.mark.yade
 @pytest.mark.slow
 @pytest.mark.skipif(not RUN_RELEASE_DEM, reason="opt-in: RUN_RELEASE_DEM=1 (re-runs a released case's DEM)")
+@pytest.mark.heavy
 def test_released_case_dem_reruns_identically(released, tmp_path):
     """26.4c: one released case's DEM, re-run from scratch from its manifest's config, equals the release.
 

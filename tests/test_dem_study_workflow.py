@@ -45,6 +45,7 @@ def test_bad_study_value_stops_before_any_job(tmp_path, workflow_dir):
 @pytest.mark.yade
 @pytest.mark.slow
 @pytest.mark.skipif(shutil.which("yade") is None, reason="needs YADE (Debian package yade)")
+@pytest.mark.heavy
 def test_tiny_study_runs_end_to_end_through_snakemake(tmp_path, workflow_dir):
     """Three real ~200-disk points (two seeds at the base, one other I): about a minute on one core."""
     config = yaml.safe_load((ROOT / "config" / "ci.yaml").read_text())
