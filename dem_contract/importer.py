@@ -268,8 +268,12 @@ def _write_case(meta, case, case_dir):
             _sidecar(case_dir / "preshear.json", {**common, "stage": "preshear", "source_file": str(run["file"]),
                                                   "mirrored": mirrored, **costs.get("preshear", {})})
         else:           # one pre-shear per case: a later run starts where the first run's pre-shear ends
-            t0, s0 = float(data["t"].iloc[rows[0]]), float(data["strain"].iloc[rows[0]])
-            if (t0, s0) != pre_end:     # no shift (and no rounding) when the run holds the same pre-shear
+            held = np.flatnonzero((data["t"].to_numpy(float) == pre_end[0])
+                                  & (data["strain"].to_numpy(float) == pre_end[1]))
+            if held.size:   # the run holds the pre-shear's last row (a data release): it starts there, unshifted,
+                start = int(held[-1])   # and may first go on shearing the pre-shear's way before it reverses
+            else:
+                t0, s0 = float(data["t"].iloc[rows[0]]), float(data["strain"].iloc[rows[0]])
                 data = data.assign(t=data["t"] - t0 + pre_end[0], strain=data["strain"] - s0 + pre_end[1])
         t, s = data["t"].to_numpy(float), data["strain"].to_numpy(float)
         reversals = []
@@ -280,7 +284,8 @@ def _write_case(meta, case, case_dir):
             if transition == "half_cosine":
                 entry["transition_strain"] = float(r["transition_strain"])
             reversals.append(entry)
-        data.iloc[rows[0] + 1:].to_csv(case_dir / f"{run['protocol']}.csv", index=False)
+        data.iloc[(rows[0] if j == 0 or not held.size else start) + 1:].to_csv(
+            case_dir / f"{run['protocol']}.csv", index=False)
         side = {**common, "stage": run["protocol"], "source_file": str(run["file"]), "mirrored": mirrored,
                 "reversal_t": reversals[0]["t"], "reversal_strain": reversals[0]["strain"], "reversals": reversals,
                 **costs.get(run["protocol"], {})}

@@ -104,6 +104,12 @@ def _git(*args, cwd) -> str:
         return "unknown"
 
 
+def reverses_at_once(sidecar: dict, pre) -> bool:
+    """Whether a run's first reversal is at the pre-shear's end (its sidecar's ``reversal_t``, within 1e-9)."""
+    t = sidecar.get("reversal_t")
+    return t is not None and abs(float(t) - float(pre["t"].iloc[-1])) <= 1e-9 * max(1.0, abs(float(t)))
+
+
 def _release_case(case_dir: Path, out: Path, with_state: bool) -> dict:
     """One finished case into ``out``: its minimal CSVs, case YAML, sidecars (and state). Returns its summary."""
     label = case_dir.name
@@ -115,6 +121,12 @@ def _release_case(case_dir: Path, out: Path, with_state: bool) -> dict:
     if not protocols:
         raise DEMInputError(f"{case_dir}: no finished reversal run (<protocol>.csv with its .json)")
     pre = read_series(case_dir / "preshear.csv", what="the case's pre-shear")
+    # the importer ends the pre-shear at the first run's first reversal: first a run that reverses at once
+    # (a schedule may first go on shearing the pre-shear's way)
+    at_once = [p for p in protocols if reverses_at_once(read_sidecar(case_dir / f"{p}.json"), pre)]
+    if not at_once:
+        raise DEMInputError(f"{case_dir}: no run reverses at the end of the pre-shear; the import format needs one")
+    protocols = [at_once[0], *(p for p in protocols if p != at_once[0])]
     out.mkdir(parents=True, exist_ok=True)
     (out / "sidecars").mkdir(exist_ok=True)
     runs = []
