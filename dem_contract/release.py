@@ -104,6 +104,14 @@ def _git(*args, cwd) -> str:
         return "unknown"
 
 
+def excluded_from_status(out: Path, repo: Path) -> list:
+    """``git status`` pathspecs leaving out the release folder ``out`` when it lies in ``repo`` (else none)."""
+    try:
+        return [f":(exclude){Path(out).resolve().relative_to(Path(repo).resolve())}"]
+    except ValueError:
+        return []
+
+
 def reverses_at_once(sidecar: dict, pre) -> bool:
     """Whether a run's first reversal is at the pre-shear's end (its sidecar's ``reversal_t``, within 1e-9)."""
     t = sidecar.get("reversal_t")
@@ -254,7 +262,9 @@ def make_release(case_dirs, out, config, command: str, with_states: bool = False
         "release": out.name,
         "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
         "code_commit": _git("rev-parse", "HEAD", cwd=repo),
-        "code_dirty": bool(_git("status", "--porcelain", "--untracked-files=no", cwd=repo)),
+        # tracked files differing from the commit, but for this release's own folder (remade: deleted first)
+        "code_dirty": bool(_git("status", "--porcelain", "--untracked-files=no", "--", ".",
+                                *excluded_from_status(out, repo), cwd=repo)),
         # the last commit that changed the DEM's code (the YADE scene and stages, the config -> scene mapping)
         "dem_code_commit": _git("log", "-1", "--format=%H", "--", *DEM_CODE, cwd=repo),
         "yade_version": yade[0] if len(yade) == 1 else yade,

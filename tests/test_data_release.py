@@ -342,3 +342,9 @@ def test_the_deciding_campaign_recomputed_from_its_release_gives_its_published_c
     assert not any(f"rule {r}:" in run.stderr + run.stdout for r in DEM_RULES)
     for name in ("paper_claims.csv", "reversal_design.csv"):
         assert filecmp.cmp(results / "claims" / name, DECIDE / "published" / name, shallow=False), name
+
+
+def test_a_release_remade_in_place_is_not_called_dirty_for_its_own_deleted_folder(tmp_path):
+    """Remaking a committed release deletes its folder first: that deletion is not a change of the code."""
+    assert release.excluded_from_status(ROOT / "data" / "x", ROOT) == [":(exclude)data/x"]
+    assert release.excluded_from_status(tmp_path / "x", ROOT) == []       # outside the repository: nothing to leave out
