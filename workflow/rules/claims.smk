@@ -54,6 +54,11 @@ rule claims:
             caption="../report/claims_power.rst",
             category=CLAIMS_CATEGORY,
         ),
+        design=report(
+            f"{CLAIMS}/reversal_design.csv",
+            caption="../report/reversal_design.rst",
+            category=CLAIMS_CATEGORY,
+        ),
     params:
         dirs=[case_dir(label) for label in CASES],
         protocols=PROTOCOLS,
