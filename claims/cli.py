@@ -70,9 +70,10 @@ def main(argv=None) -> int:
         tab = table.claims_table(pred, dem_cases, table.eq2_params(params), args.resamples, args.seed, ff)
         tab.to_csv(out / "paper_claims.csv", index=False, float_format="%.6g")
         report.forest_plot(tab, out / "paper_claims.png")
-        pw, cost = power.power_table(inputs.runs(pred), args.dem, tab)
+        runs = inputs.runs(pred)
+        pw, cost = power.power_table(runs, args.dem, tab)
         power.with_unknown_costs(pw).to_csv(out / "power.csv", index=False, float_format="%.6g")
-        dsg = design.design_table(inputs.runs(pred), args.dem, args.protocols)
+        dsg = design.design_table(runs, args.dem, args.protocols, dem_cases)
         dsg.to_csv(out / "reversal_design.csv", index=False, float_format="%.6g")
         presets = [power.preset_from_config(*_preset(p), cost) for p in args.preset]
         section = report.markdown_section(tab, source=f"`{out / 'paper_claims.csv'}`")

@@ -29,8 +29,8 @@ one spaced 0.5, ...) measures every design on the same seeds. For each protocol
   ones; :math:`k_p`: they repeat one another);
 - how far the fabric has recovered when each reversal starts: the mean over
   reversals of :math:`|A_0|/|A|_{ss}`, :math:`A_0` the fabric just before the
-  reversal (``dem_contract.split_transients``: over the last
-  ``PRE_REVERSAL_WINDOW`` strain of the leg before it) and :math:`|A|_{ss}` the
+  reversal (``claims.inputs.DemCase.initial_A``, from ``dem_contract.split_transients``:
+  over the last ``PRE_REVERSAL_WINDOW`` strain of the leg before it) and :math:`|A|_{ss}` the
   pre-shear's steady :math:`|A|` (a train spaced too closely starts its later
   reversals from a fabric that has not regrown: a ratio below 1).
 
@@ -44,13 +44,10 @@ from __future__ import annotations
 
 import math
 import re
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
 from scipy import stats
-
-from dem_contract import fabric_norm, read_series, read_sidecar, split_transients, steady_values
 
 from . import power, table
 
@@ -59,7 +56,6 @@ COLUMNS = ["protocol", "seeds", "reversals_per_seed", "mean_difference", "mean_l
            "information_per_core_hour", "relative_information", "A_at_reversal_over_steady"]
 
 _REVERSAL_SUFFIX = re.compile(r"_r\d+$")
-COLUMNS_READ = ("t", "strain", "gammadot", "A_xx", "A_xy", "mu")
 
 
 def base_protocol(key: str) -> str:
@@ -76,22 +72,16 @@ def sd_interval(sd: float, n: int, level: float = 0.95) -> tuple:
             sd * math.sqrt((n - 1) / stats.chi2.ppf(a, n - 1)))
 
 
-def recovery(case_dirs, protocol: str) -> float:
-    r"""Mean :math:`|A_0|/|A|_{ss}` over the reversals of ``protocol`` in every case (module docstring); NaN if none."""
-    ratios = []
-    for d in map(Path, case_dirs):
-        path = d / f"{protocol}.csv"
-        if not path.is_file():
-            continue
-        pre = read_series(d / "preshear.csv", COLUMNS_READ, 10, what="the pre-shear")
-        steady = steady_values(pre)["A_norm"]
-        for tr in split_transients(pre, read_series(path, COLUMNS_READ, 10, what=str(path)), read_sidecar(path),
-                                   what=str(path)):
-            ratios.append(float(fabric_norm(tr.initial["A_xx"], tr.initial["A_xy"])) / steady)
+def recovery(dem_cases, protocol: str) -> float:
+    r"""Mean :math:`|A_0|/|A|_{ss}` over the reversals of ``protocol`` in every case (module docstring); NaN if none.
+
+    ``dem_cases``: ``claims.inputs.DemCase`` of each case (its ``initial_A`` and steady ``A_norm``).
+    """
+    ratios = [a / c.steady["A_norm"] for c in dem_cases for a in c.initial_A.get(protocol, [])]
     return float(np.mean(ratios)) if ratios else math.nan
 
 
-def design_table(runs: dict, case_dirs, protocols) -> pd.DataFrame:
+def design_table(runs: dict, case_dirs, protocols, dem_cases=()) -> pd.DataFrame:
     """One row per reversal protocol (``COLUMNS``), from the claims' runs and the DEM cases' sidecars.
 
     Parameters
@@ -102,6 +92,8 @@ def design_table(runs: dict, case_dirs, protocols) -> pd.DataFrame:
         The DEM cases (stage sidecars: CPU time per stage).
     protocols : list of str
         The campaign's reversal protocols.
+    dem_cases : sequence of claims.inputs.DemCase
+        The same cases as read for the claims table (the fabric before each reversal); none: NaN recovery.
     """
     rows = []
     for p in protocols:
@@ -124,7 +116,7 @@ def design_table(runs: dict, case_dirs, protocols) -> pd.DataFrame:
             mean_hi=mean + half, sd_per_seed=sd, sd_lo=lo, sd_hi=hi, sd_single_reversal=sd1,
             design_effect=sd ** 2 / (sd1 ** 2 / k) if v.size and sd1 > 0 else math.nan,
             cpu_hours_per_seed=hours, information_per_core_hour=1.0 / (sd ** 2 * hours) if sd > 0 else math.nan,
-            A_at_reversal_over_steady=recovery(case_dirs, p)))
+            A_at_reversal_over_steady=recovery(dem_cases, p)))
     out = pd.DataFrame(rows, columns=COLUMNS)
     best = out["information_per_core_hour"].max()
     out["relative_information"] = out["information_per_core_hour"] / best if np.isfinite(best) else math.nan

@@ -23,8 +23,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from dem_contract import (REVERSAL_PROTOCOLS, DEMInputError, pre_reversal_state, read_series, read_sidecar,
-                          split_case_label, split_transients, steady_values)
+from dem_contract import (REVERSAL_PROTOCOLS, DEMInputError, fabric_norm, pre_reversal_state, read_series,
+                          read_sidecar, split_case_label, split_transients, steady_values)
 from dem_contract.derived import reversal_kinds
 from dem_contract.tables import read_table
 
@@ -108,6 +108,7 @@ class DemCase:
     group: str
     steady: dict                 # dem_contract.steady_values of the pre-shear; theta_A for positive shear
     samples: pd.DataFrame = field(default_factory=pd.DataFrame)   # SAMPLE_COLUMNS
+    initial_A: dict = field(default_factory=dict)   # protocol -> |A| just before each of its reversals
 
 
 def read_dem_case(case_dir, protocols=REVERSAL_PROTOCOLS) -> DemCase:
@@ -119,7 +120,9 @@ def read_dem_case(case_dir, protocols=REVERSAL_PROTOCOLS) -> DemCase:
     run's median) are tagged with the run's ``protocol``, the reversal's ``kind``
     (``dem_contract.derived.reversal_kinds``: heaviside or sinusoidal, from the sidecar
     for a schedule) and its number ``reversal``. ``X = sqrt2 A_xy sign(gammadot)`` and
-    mu are the same in either frame, so a +1 reversal needs no mirroring here.
+    mu are the same in either frame, so a +1 reversal needs no mirroring here. The
+    fabric just before each reversal (its transient's ``initial`` state) is kept as
+    ``initial_A``: protocol -> |A| per reversal.
 
     Parameters
     ----------
@@ -136,7 +139,7 @@ def read_dem_case(case_dir, protocols=REVERSAL_PROTOCOLS) -> DemCase:
     sign = pre_reversal_state(pre)["gammadot_sign"]
     if sign < 0:   # mirror to positive shear: the angle Eq. 4's bound refers to
         steady["theta_A"] = float(np.mod(180.0 - steady["theta_A"], 180.0))
-    frames = []
+    frames, initial_A = [], {}
     for proto in protocols:
         path = case_dir / f"{proto}.csv"
         if not path.exists():
@@ -149,6 +152,7 @@ def read_dem_case(case_dir, protocols=REVERSAL_PROTOCOLS) -> DemCase:
             raise DEMInputError(f"{path}: the sidecar's schedule makes {len(kinds)} reversal(s), the run holds "
                                 f"{len(transients)}")
         median = np.median(np.abs(d["gammadot"].to_numpy()))
+        initial_A[proto] = [float(fabric_norm(tr.initial["A_xx"], tr.initial["A_xy"])) for tr in transients]
         for tr, kind in zip(transients, kinds):
             t = tr.data
             g = t["gammadot"].to_numpy()
@@ -160,7 +164,7 @@ def read_dem_case(case_dir, protocols=REVERSAL_PROTOCOLS) -> DemCase:
                 "stress_ratio": (t["sigma_xy"] / t["p"]).to_numpy()[moving]}, columns=SAMPLE_COLUMNS))
     group, _ = split_case_label(case_dir.name)
     samples = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(columns=SAMPLE_COLUMNS)
-    return DemCase(label=case_dir.name, group=group, steady=steady, samples=samples)
+    return DemCase(label=case_dir.name, group=group, steady=steady, samples=samples, initial_A=initial_A)
 
 
 FREEFORM_COLUMNS = ("section", "key", "value", "low", "high", "n", "detail")

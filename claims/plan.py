@@ -163,6 +163,7 @@ def plan_table(table: pd.DataFrame, seed_cpu_s: float, ensembles: int = 1) -> pd
         else:
             needed, outcome = math.nan, "unknown"
         add = max(0.0, needed - n_now) if np.isfinite(needed) else needed
+        hours = _hours(add, seed_cpu_s)
         note = ("no seed-to-seed s.d.: the claim could not be computed (or has one seed)" if not np.isfinite(sd)
                 else "measured effect about 0 and no margin: no number of seeds decides it"
                 if not options else "")
@@ -172,8 +173,8 @@ def plan_table(table: pd.DataFrame, seed_cpu_s: float, ensembles: int = 1) -> pd
             seeds_needed=needed if not np.isfinite(needed) else int(needed),
             cases_to_add=add if not np.isfinite(add) else int(add),
             config_seeds_to_add=int(math.ceil(add / ensembles)) if np.isfinite(add) else add,
-            core_hours=_hours(add, seed_cpu_s), wall_hours_2_cores=wall_hours(_hours(add, seed_cpu_s), seed_cpu_s, 2),
-            wall_hours_cluster=wall_hours(_hours(add, seed_cpu_s), seed_cpu_s, None), seeds_sided=sided, sided_outcome=sided_outcome,
+            core_hours=hours, wall_hours_2_cores=wall_hours(hours, seed_cpu_s, 2),
+            wall_hours_cluster=wall_hours(hours, seed_cpu_s, None), seeds_sided=sided, sided_outcome=sided_outcome,
             seeds_negligible=negl, note=note))
     return pd.DataFrame(rows, columns=COLUMNS)
 

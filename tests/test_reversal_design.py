@@ -77,11 +77,13 @@ def test_recovery_of_a_reversal_from_the_steady_pre_shear_is_about_one(tmp_path)
     """Real DEM (a released narrow cell at the paper's physics): a Heaviside reversal from the end of a steady
     pre-shear starts from the steady fabric, |A0| / |A|_ss within the fabric's noise of 1; a protocol the
     case did not run gives NaN."""
+    from claims.inputs import read_dem_case
     from dem_contract import release
     case = release.restore_case(RELEASE, "narrow-H37-W18_s1", tmp_path / "narrow-H37-W18_s1")
-    r = design.recovery([case], "heaviside")
+    dem = [read_dem_case(case, ["heaviside", "train03"])]
+    r = design.recovery(dem, "heaviside")
     assert 0.9 < r < 1.1
-    assert math.isnan(design.recovery([case], "train03"))
+    assert math.isnan(design.recovery(dem, "train03"))
 
 
 def test_sd_interval_is_the_chi_square_one():
