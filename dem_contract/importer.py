@@ -261,6 +261,7 @@ def _write_case(meta, case, case_dir):
         revs = run["reversals"]
         targets = [{**r, "strain": -float(r["strain"]) if mirrored else float(r["strain"])} for r in revs]
         rows = reversal_rows(data, targets, src)
+        start = rows[0]     # the run's file holds its rows after this one
         if j == 0:
             pre = data.iloc[: rows[0] + 1]
             pre_end = (float(pre["t"].iloc[-1]), float(pre["strain"].iloc[-1]))
@@ -273,7 +274,7 @@ def _write_case(meta, case, case_dir):
             if held.size:   # the run holds the pre-shear's last row (a data release): it starts there, unshifted,
                 start = int(held[-1])   # and may first go on shearing the pre-shear's way before it reverses
             else:
-                t0, s0 = float(data["t"].iloc[rows[0]]), float(data["strain"].iloc[rows[0]])
+                t0, s0 = float(data["t"].iloc[start]), float(data["strain"].iloc[start])
                 data = data.assign(t=data["t"] - t0 + pre_end[0], strain=data["strain"] - s0 + pre_end[1])
         t, s = data["t"].to_numpy(float), data["strain"].to_numpy(float)
         reversals = []
@@ -284,8 +285,7 @@ def _write_case(meta, case, case_dir):
             if transition == "half_cosine":
                 entry["transition_strain"] = float(r["transition_strain"])
             reversals.append(entry)
-        data.iloc[(rows[0] if j == 0 or not held.size else start) + 1:].to_csv(
-            case_dir / f"{run['protocol']}.csv", index=False)
+        data.iloc[start + 1:].to_csv(case_dir / f"{run['protocol']}.csv", index=False)
         side = {**common, "stage": run["protocol"], "source_file": str(run["file"]), "mirrored": mirrored,
                 "reversal_t": reversals[0]["t"], "reversal_strain": reversals[0]["strain"], "reversals": reversals,
                 **costs.get(run["protocol"], {})}
