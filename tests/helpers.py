@@ -308,3 +308,17 @@ def counts(stdout):
         if len(parts) == 2 and parts[1].isdigit():
             out[parts[0]] = int(parts[1])
     return out
+
+
+def workflow_rules(workdir, configfile):
+    """The rules of the workflow in ``workdir`` (a ``workflow_copy``) parsed with ``configfile``, through
+    Snakemake's API (no job runs): their names, shell commands and outputs with their flags."""
+    from snakemake.api import SnakemakeApi
+    from snakemake.settings.types import ConfigSettings, OutputSettings, ResourceSettings, StorageSettings
+
+    with SnakemakeApi(OutputSettings()) as api:
+        workflow = api.workflow(
+            resource_settings=ResourceSettings(), storage_settings=StorageSettings(),
+            config_settings=ConfigSettings(configfiles=[Path(configfile)]),
+            snakefile=Path(workdir) / "Snakefile", workdir=Path(workdir))
+        return list(workflow._workflow.rules)

@@ -11,7 +11,7 @@ import shlex
 
 import pytest
 
-from tests.helpers import ROOT, counts, dry_run
+from tests.helpers import ROOT, counts, dry_run, workflow_rules
 
 #: Rules of the study the quick preset must keep (DEM, calibration, comparison, claims, and
 #: what accuracy costs in the study itself: the ODE work-precision and the packing's share).
@@ -22,16 +22,9 @@ STUDY = {"dem_pack", "dem_preshear", "dem_reversal", "calibrate", "compare_predi
 @pytest.fixture(scope="module")
 def code_benchmarks(module_workflow_dir):
     """Rule names whose shell command runs a module or a tools/ script named ``*benchmark*``."""
-    from snakemake.api import SnakemakeApi
-    from snakemake.settings.types import ConfigSettings, OutputSettings, ResourceSettings, StorageSettings
-
-    with SnakemakeApi(OutputSettings()) as api:
-        workflow = api.workflow(
-            resource_settings=ResourceSettings(), storage_settings=StorageSettings(),
-            config_settings=ConfigSettings(configfiles=[module_workflow_dir / "config" / "quick.yaml"]),
-            snakefile=module_workflow_dir / "Snakefile", workdir=module_workflow_dir)
-        names = {rule.name for rule in workflow._workflow.rules
-                 if rule.shellcmd and re.search(r"-m \w+(\.\w+)*benchmark\b|tools/\w*benchmark\.py\b", rule.shellcmd)}
+    rules = workflow_rules(module_workflow_dir, module_workflow_dir / "config" / "quick.yaml")
+    names = {rule.name for rule in rules
+             if rule.shellcmd and re.search(r"-m \w+(\.\w+)*benchmark\b|tools/\w*benchmark\.py\b", rule.shellcmd)}
     assert {"batched_cost", "calibration_cost", "stage_overhead"} <= names, names  # else the definition found nothing
     return names
 

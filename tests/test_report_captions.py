@@ -15,7 +15,7 @@ import pytest
 import yaml
 from jinja2 import Environment, StrictUndefined
 
-from tests.helpers import ROOT
+from tests.helpers import ROOT, workflow_rules
 
 CAPTIONS = sorted((ROOT / "workflow" / "report").glob("*.rst"))
 #: Captions of rules that run only with a study switched on, and the config that switches it on.
@@ -60,16 +60,9 @@ def test_a_campaign_caption_lists_the_cases_and_a_set_caption_its_set():
 @pytest.fixture(scope="module")
 def report_flags(module_workflow_dir):
     """Output path (below the results folder) -> its report flag, for every rule of the quick preset."""
-    from snakemake.api import SnakemakeApi
-    from snakemake.settings.types import ConfigSettings, OutputSettings, ResourceSettings, StorageSettings
-
-    with SnakemakeApi(OutputSettings()) as api:
-        workflow = api.workflow(
-            resource_settings=ResourceSettings(), storage_settings=StorageSettings(),
-            config_settings=ConfigSettings(configfiles=[module_workflow_dir / "config" / "quick.yaml"]),
-            snakefile=module_workflow_dir / "Snakefile", workdir=module_workflow_dir)
-        return {re.sub(r"\{(\w+),[^}]*\}", r"{\1}", str(f).split("results/", 1)[-1]): f.flags.get("report")
-                for rule in workflow._workflow.rules for f in rule.output}
+    rules = workflow_rules(module_workflow_dir, module_workflow_dir / "config" / "quick.yaml")
+    return {re.sub(r"\{(\w+),[^}]*\}", r"{\1}", str(f).split("results/", 1)[-1]): f.flags.get("report")
+            for rule in rules for f in rule.output}
 
 
 #: The report shows HTML and images inline and offers a CSV for download: each verdict table is in it as both.
