@@ -69,7 +69,43 @@ def parser() -> argparse.ArgumentParser:
                         "score them against Models 1 and 2 on held-out seeds: freeform.csv, and on Figs. 3a, 3b")
     g.add_argument("--freeform-breaks", type=int, default=freeform.FreeformSettings.n_breaks,
                    help="spline breaks over the X range visited (at least 2)")
+    g.add_argument("--freeform-layouts", nargs="+", type=knot_layout, default=None, metavar="BREAKS:CROWDING",
+                   help="knot layouts the cross-validation chooses among (default: --freeform-breaks evenly "
+                        "spaced, crowded, and 2 more crowded; crowding 1 is even)")
+    g.add_argument("--freeform-penalties", nargs="+", type=penalty, default=list(freeform.FreeformSettings.penalties),
+                   help="roughness penalties the cross-validation chooses among")
     return p
+
+
+def knot_layout(text: str) -> tuple:
+    """``BREAKS:CROWDING`` (for instance ``5:2``) -> (5, 2.0), a layout of ``freeform.breaks_for``, checked
+    by ``freeform.FreeformSettings`` (so the pre-flight refuses a bad one before any DEM)."""
+    try:
+        n, crowd = text.split(":")
+        layout = (int(n), float(crowd))
+        freeform.FreeformSettings(layouts=(layout,))
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected BREAKS:CROWDING with BREAKS an integer >= 2 and "
+                                         f"CROWDING >= 1, for instance 5:2 ({exc})") from None
+    return layout
+
+
+def penalty(text: str) -> float:
+    """A roughness penalty of the free-form cross-validation: a positive number."""
+    try:
+        value = float(text)
+        freeform.FreeformSettings(penalties=(value,))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected a positive number") from None
+    return value
+
+
+def freeform_settings(a) -> freeform.FreeformSettings | None:
+    """The free-form fit's settings from parsed arguments; None without ``--freeform``."""
+    if not a.freeform:
+        return None
+    return freeform.FreeformSettings(n_breaks=a.freeform_breaks, layouts=a.freeform_layouts,
+                                     penalties=tuple(a.freeform_penalties))
 
 
 def main(argv=None) -> int:
@@ -92,7 +128,7 @@ def main(argv=None) -> int:
                                          mu_weight=a.mu_weight, steady_weight=a.steady_weight),
             steady_weight=a.steady_weight, n_boot=a.bootstrap, boot_evals=a.bootstrap_evals, seed=a.seed,
             min_samples=a.min_samples, figures=not a.no_figures,
-            freeform=freeform.FreeformSettings(n_breaks=a.freeform_breaks) if a.freeform else None,
+            freeform=freeform_settings(a),
             profile=profiles.ProfileSettings(n_points=a.profile_points, evals=a.profile_evals))
         run(a.dem, a.out, settings, log=lambda m: print(m, file=sys.stderr, flush=True),
             argv=["python -m calibrate", *argv])

@@ -238,3 +238,25 @@ def test_cross_validation_chooses_the_layout_and_the_penalty_together(model1_tru
     assert res["spline"].breaks == freeform.breaks_for(model1_truth["replays"], n, crowd)
     rows = res["table"][res["table"]["section"] == "cv"]
     assert len(rows) == len(cv) and rows["detail"].str.contains("crowding").all()
+
+
+def test_command_line_narrows_the_cross_validation_grid_to_the_layouts_and_penalties_named():
+    from calibrate.__main__ import freeform_settings, parser
+
+    argv = ["--dem", "d", "--out", "o", "--freeform", "--freeform-layouts", "5:2", "--freeform-penalties", "1e-4", "1"]
+    s = freeform_settings(parser().parse_args(argv))
+    assert s.knot_layouts() == ((5, 2.0),) and s.penalties == (1e-4, 1.0)
+    assert freeform_settings(parser().parse_args(argv[:4])) is None
+    default = freeform_settings(parser().parse_args(argv[:5]))
+    assert default == freeform.FreeformSettings()
+
+
+@pytest.mark.parametrize("option, words", [("--freeform-layouts 1:2", "BREAKS an integer >= 2"),
+                                           ("--freeform-layouts 5:0.5", "CROWDING >= 1"),
+                                           ("--freeform-layouts 5", "BREAKS:CROWDING"),
+                                           ("--freeform-penalties 0", "positive number")])
+def test_preflight_refuses_a_bad_cross_validation_grid_naming_the_calibration_options(option, words):
+    from preflight.checks import options_problems
+
+    problems = options_problems({"calibration": {"options": option}, "compare": {"options": ""}})
+    assert len(problems) == 1 and "calibration.options" in problems[0] and words in problems[0], problems
