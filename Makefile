@@ -7,7 +7,9 @@ STAMP := $(VENV)/.installed
 
 .PHONY: setup yade venv quick paper bench test test-all slurm-test lint clean
 
-setup: yade venv
+# apt (YADE) and pip (.venv) are independent: on a fresh machine they download side by side.
+setup:
+	@$(MAKE) --no-print-directory -j2 yade venv
 
 yade:
 	@command -v yade >/dev/null || { \
