@@ -28,26 +28,25 @@ import re
 
 import pandas as pd
 
+from campaign.schema_defaults import block_defaults
 from campaign.scenes import scene_from_config
 
 from . import grid
 
 NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9-]*$")
 SEP = "_s"
-DEFAULTS = dict(heaviside_strain=0.3, preshear_strain=1.5, steady_window=1.0, transient_bin=0.01,
-                early_strain=0.1, match_se=2.0)
 CELL_KEYS = ("kind", "H_over_d", "W_over_H", "mass", "contact_law", "train", "seeds")
 TRAIN_STAGE = "train"
 PERIODIC_MAX_W_OVER_H = 1.1
 
 
 def settings(config: dict) -> dict:
-    """The study's block with its defaults filled in (``DEFAULTS``)."""
-    return {**DEFAULTS, **(config.get("accuracy") or {}).get("bulk_vs_walls", {})}
+    """The study's block with the schema's defaults filled in (``campaign.schema_defaults``)."""
+    return {**block_defaults("accuracy", "bulk_vs_walls"), **(config.get("accuracy") or {}).get("bulk_vs_walls", {})}
 
 
 def enabled(config: dict) -> bool:
-    return bool(settings(config).get("run", False))
+    return bool(settings(config)["run"])
 
 
 def reversal_stage(spec: dict) -> str:

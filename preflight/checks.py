@@ -30,11 +30,11 @@ from campaign.calibration_sets import calibration_sets, same_value
 from campaign.cases import cases, rates
 from campaign.configfile import ConfigProblem, configfile_problems, load_configfile  # noqa: F401 (re-exported)
 from campaign.scene_spec import inertial_number_range, protocol_strain, scene_default, scene_module
+from campaign.schema_defaults import SCHEMA
 from campaign.scenes import scene_from_config
 from dem_contract.labels import case_label, format_number
 
 ROOT = Path(__file__).resolve().parents[1]
-SCHEMA = ROOT / "workflow" / "schemas" / "config.schema.yaml"
 
 #: Largest inertial number taken as quasi-static (the model's regime, docs/model.md):
 #: above it a campaign needs ``loading.allow_inertial: true``.

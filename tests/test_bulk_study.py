@@ -245,3 +245,24 @@ def test_design_effect_compares_the_seed_standard_error_with_the_pooled_transien
     assert row["design_effect_A_norm"] == pytest.approx(1.0)    # one transient per seed: the same SE
     train = cells.set_index("cell").loc["train"]
     assert train["early_se_pooled_A_norm"] == pytest.approx(0.0, abs=1e-9)   # identical transients
+
+
+def test_the_study_cli_fills_the_defaults_the_workflow_fills_from_the_schema():
+    """python -m dem_study.bulk_cli reads a preset without Snakemake: its settings must be what
+    Snakemake's schema validation gives the workflow (the schema is the defaults' one home)."""
+    import copy
+
+    import yaml
+    from snakemake.utils import validate
+
+    from campaign.schema_defaults import SCHEMA
+    from dem_study import bulk_cells
+
+    raw = yaml.safe_load((Path(__file__).resolve().parents[1] / "config" / "bulk_validation.yaml").read_text())
+    raw = {**yaml.safe_load((Path(__file__).resolve().parents[1] / "config" / "quick.yaml").read_text()), **raw}
+    for key in ("heaviside_strain", "steady_window", "match_se"):
+        raw["accuracy"]["bulk_vs_walls"].pop(key, None)      # left to the defaults
+    filled = copy.deepcopy(raw)
+    validate(filled, str(SCHEMA))
+    assert bulk_cells.settings(raw) == filled["accuracy"]["bulk_vs_walls"]
+    assert bulk_cells.settings(raw)["match_se"] == 2.0 and bulk_cells.enabled({}) is False

@@ -1,0 +1,33 @@
+"""The defaults the workflow's config schema declares, for code that reads a config without it.
+
+The schema (``workflow/schemas/config.schema.yaml``) is the one home of every config
+default: Snakemake's ``validate`` fills them in for the workflow, and a command-line
+tool that reads a preset directly (``python -m dem_study.bulk_cli``) takes them from
+here rather than repeating them.
+"""
+from __future__ import annotations
+
+import functools
+from pathlib import Path
+
+import yaml
+
+ROOT = Path(__file__).resolve().parents[1]
+SCHEMA = ROOT / "workflow" / "schemas" / "config.schema.yaml"
+
+
+@functools.lru_cache(maxsize=None)
+def schema(path=SCHEMA) -> dict:
+    """The config schema, parsed once."""
+    return yaml.safe_load(Path(path).read_text())
+
+
+def block_defaults(*keys: str, path=SCHEMA) -> dict:
+    """The ``default`` of every property of the config block at ``keys`` that declares one.
+
+    ``block_defaults("accuracy", "bulk_vs_walls")`` -> ``{"run": False, "preshear_strain": 1.5, ...}``.
+    """
+    node = schema(path)
+    for key in keys:
+        node = node["properties"][key]
+    return {name: prop["default"] for name, prop in node.get("properties", {}).items() if "default" in prop}
