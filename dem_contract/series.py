@@ -1,7 +1,9 @@
 """Read and check one DEM time series (and its sidecar) of the DEM contract (docs/data-contract.md)."""
 from __future__ import annotations
 
+import csv
 import gzip
+import io
 import json
 from pathlib import Path
 
@@ -116,33 +118,65 @@ def read_series(path, columns=CONTRACT_COLUMNS, min_samples: int = 2, what: str 
 
 
 def _check_rows_complete(path: Path) -> None:
-    """Every line holds as many fields as the header, and the file ends with a newline.
-
-    A row cut off while being written (a killed run, a full disk) is otherwise
-    read by pandas as NaN in its missing fields, or as a shortened number.
-
-    Raises
-    ------
-    DEMInputError
-        Naming the line (and data row) with too few or too many fields, or the
-        last line when it does not end with a newline.
-    """
+    """``check_complete_rows`` on a series file, gzipped or not (an empty file is left to pandas to report)."""
     try:
         text = gzip.open(path, "rt").read() if path.suffix == ".gz" else path.read_text()
     except (OSError, UnicodeDecodeError, EOFError) as exc:
         raise DEMInputError(f"{path}: not a readable CSV ({exc})") from None
-    lines = text.splitlines()
-    if not lines:
-        return  # pandas reports the empty file
-    n_fields = lines[0].count(",") + 1
-    for k, line in enumerate(lines[1:], start=2):
-        got = line.count(",") + 1
-        if got != n_fields:
-            raise DEMInputError(f"{path}: line {k} (data row {k - 1}) has {got} field(s), the header {n_fields}: "
-                                "a ragged row (cut off while being written?)")
-    if len(lines) > 1 and not text.endswith("\n"):
-        raise DEMInputError(f"{path}: the last line (line {len(lines)}, data row {len(lines) - 1}) does not end "
-                            "with a newline: the row was cut off while being written")
+    if text.strip():
+        check_complete_rows(path, text)
+
+
+def check_complete_rows(path, text: str | None = None) -> int:
+    """Every record of a CSV holds as many fields as its header, and the file ends with a newline.
+
+    Records are parsed by the ``csv`` module (quoted fields may hold commas and
+    line breaks), so a line is named as the reader counts it.
+
+    Parameters
+    ----------
+    path : str or Path
+    text : str, optional
+        The file's text, if already read.
+
+    Returns
+    -------
+    int
+        The number of data records (after the header).
+
+    Raises
+    ------
+    DEMInputError
+        Naming the file and the line (and data row) with too few or too many
+        fields, or the last line when it lacks its newline (a row cut off while
+        being written).
+    """
+    path = Path(path)
+    if text is None:
+        try:
+            text = path.read_text()
+        except (OSError, UnicodeDecodeError) as exc:
+            raise DEMInputError(f"{path}: not a readable CSV ({exc})") from None
+    if not text.strip():
+        raise DEMInputError(f"{path}: empty file (no header)")
+    reader = csv.reader(io.StringIO(text, newline=""))
+    try:
+        header = next(reader)
+        n_rows = 0
+        for record in reader:
+            if not record:  # a blank line: pandas skips it too
+                continue
+            n_rows += 1
+            if len(record) != len(header):
+                raise DEMInputError(f"{path}: line {reader.line_num} (data row {n_rows}) has {len(record)} "
+                                    f"field(s), the header {len(header)}: a ragged row (cut off while being "
+                                    "written?)")
+    except csv.Error as exc:
+        raise DEMInputError(f"{path}: line {reader.line_num}: not a readable CSV ({exc})") from None
+    if not text.endswith("\n"):
+        raise DEMInputError(f"{path}: the last line (line {reader.line_num}, data row {n_rows}) does not end with "
+                            "a newline: the row was cut off while being written")
+    return n_rows
 
 
 def _check_bounds(path: Path, data: pd.DataFrame) -> None:

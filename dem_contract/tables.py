@@ -8,65 +8,12 @@ reader (``dem_contract.series.read_series``), which adds the contract's checks.
 """
 from __future__ import annotations
 
-import csv
 import io
 from pathlib import Path
 
 import pandas as pd
 
-from .series import DEMInputError
-
-
-def check_complete_rows(path, text: str | None = None) -> int:
-    """Every record of a CSV holds as many fields as its header, and the file ends with a newline.
-
-    Records are parsed by the ``csv`` module (quoted fields may hold commas and
-    line breaks), so a line is named as the reader counts it.
-
-    Parameters
-    ----------
-    path : str or Path
-    text : str, optional
-        The file's text, if already read.
-
-    Returns
-    -------
-    int
-        The number of data records (after the header).
-
-    Raises
-    ------
-    DEMInputError
-        Naming the file and the line (and data row) with too few or too many
-        fields, or the last line when it lacks its newline (a row cut off while
-        being written).
-    """
-    path = Path(path)
-    if text is None:
-        try:
-            text = path.read_text()
-        except (OSError, UnicodeDecodeError) as exc:
-            raise DEMInputError(f"{path}: not a readable CSV ({exc})") from None
-    if not text.strip():
-        raise DEMInputError(f"{path}: empty file (no header)")
-    reader = csv.reader(io.StringIO(text, newline=""))
-    try:
-        header = next(reader)
-        n_rows = 0
-        for record in reader:
-            if not record:  # a blank line: pandas skips it too
-                continue
-            n_rows += 1
-            if len(record) != len(header):
-                raise DEMInputError(f"{path}: line {reader.line_num} (data row {n_rows}) has {len(record)} "
-                                    f"field(s), the header {len(header)}: a ragged row (cut off while being "
-                                    "written?)")
-    except csv.Error as exc:
-        raise DEMInputError(f"{path}: line {reader.line_num}: not a readable CSV ({exc})") from None
-    if not text.endswith("\n"):
-        raise DEMInputError(f"{path}: the last line (line {reader.line_num}, data row {n_rows}) does not end with "
-                            "a newline: the row was cut off while being written")
-    return n_rows
+from .series import DEMInputError, check_complete_rows
 
 
 def read_table(path, columns=(), what: str = "a table") -> pd.DataFrame:
