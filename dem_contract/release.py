@@ -131,7 +131,8 @@ def _release_case(case_dir: Path, out: Path, with_state: bool) -> dict:
     pre = read_series(case_dir / "preshear.csv", what="the case's pre-shear")
     # the importer ends the pre-shear at the first run's first reversal: first a run that reverses at once
     # (a schedule may first go on shearing the pre-shear's way)
-    at_once = [p for p in protocols if reverses_at_once(read_sidecar(case_dir / f"{p}.json"), pre)]
+    sides = {p: read_sidecar(case_dir / f"{p}.json") for p in protocols}
+    at_once = [p for p in protocols if reverses_at_once(sides[p], pre)]
     if not at_once:
         raise DEMInputError(f"{case_dir}: no run reverses at the end of the pre-shear; the import format needs one")
     protocols = [at_once[0], *(p for p in protocols if p != at_once[0])]
@@ -141,7 +142,7 @@ def _release_case(case_dir: Path, out: Path, with_state: bool) -> dict:
     for protocol in protocols:
         path = case_dir / f"{protocol}.csv"
         run = read_series(path, what="a reversal run")
-        side = read_sidecar(path.with_suffix(".json"))
+        side = sides[protocol]
         kinds = reversal_kinds(side, protocol, what=str(path))
         reversals = []
         for tr, kind in zip(split_transients(pre, run, side, what=str(path)), kinds):
