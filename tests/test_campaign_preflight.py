@@ -19,8 +19,7 @@ import pytest
 import yaml
 
 import preflight
-from preflight.__main__ import main as preflight_main
-from tests.helpers import ROOT, snakemake, workflow_copy
+from tests.helpers import ROOT, preflight_check, snakemake, workflow_copy
 
 CI = yaml.safe_load((ROOT / "config" / "ci.yaml").read_text())
 # without extra calibrate options: checking them imports calibrate (seconds), needed only by their own cases
@@ -154,20 +153,13 @@ def assert_names_the_key(name, path, message):
         assert words.replace(".yaml:", f"{path.name}:") in message, (words, message[-2000:])
 
 
-def check_command(path, capsys):
-    """``python -m preflight check path``, in-process: (exit code, stderr)."""
-    capsys.readouterr()
-    code = preflight_main(["check", str(path)])
-    return code, capsys.readouterr().err
-
-
 @pytest.mark.parametrize("name", list(CASES))
-def test_bad_config_is_refused_by_the_preflight_naming_the_key(tmp_path, capsys, name):
+def test_bad_config_is_refused_by_the_preflight_naming_the_key(tmp_path, name):
     path = write_case(tmp_path, name)
-    code, message = check_command(path, capsys)
-    assert code == 2, message[-2000:]
-    assert message.strip() and "Traceback" not in message, message[-2000:]
-    assert_names_the_key(name, path, message)
+    result = preflight_check(path)
+    assert result.returncode == 2, result.stderr[-2000:]
+    assert result.stderr.strip() and "Traceback" not in result.stderr, result.stderr[-2000:]
+    assert_names_the_key(name, path, result.stderr)
 
 
 def dry_run(path):
@@ -186,13 +178,13 @@ def dry_runs(tmp_path_factory):
 
 
 @pytest.mark.parametrize("name", END_TO_END)
-def test_bad_config_stops_snakemake_before_any_job_with_the_preflights_lines(dry_runs, capsys, name):
+def test_bad_config_stops_snakemake_before_any_job_with_the_preflights_lines(dry_runs, name):
     path, result = dry_runs[name]
     message = result.stdout + result.stderr
     assert result.returncode == 2, message[-2000:]
     assert "Traceback" not in message and "Building DAG" not in message, message[-2000:]
     assert_names_the_key(name, path, message)
-    _, lines = check_command(path, capsys)
+    lines = preflight_check(path).stderr
     assert lines.strip() and all(line in message for line in lines.splitlines()), (lines, message[-2000:])
 
 
@@ -247,12 +239,18 @@ def test_config_file_that_cannot_be_read_is_named_with_its_line(tmp_path, text, 
     path = tmp_path / "bad.yaml"
     if text is not None:
         path.write_text(text)
-    result = subprocess.run([sys.executable, "-m", "preflight", "check", str(path)],
-                            cwd=ROOT, capture_output=True, text=True, timeout=60)
+    result = preflight_check(path)
     assert result.returncode == 2
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1 and "Traceback" not in result.stderr, result.stderr
     assert all(w in lines[0] for w in words), lines[0]
+
+
+def test_the_preflight_command_exits_2_with_one_line_naming_a_file_it_cannot_read(tmp_path):
+    result = subprocess.run([sys.executable, "-m", "preflight", "check", str(tmp_path / "absent.yaml")],
+                            cwd=ROOT, capture_output=True, text=True, timeout=60)
+    assert result.returncode == 2 and "Traceback" not in result.stderr, result.stderr
+    assert result.stderr.strip() == f"config error: {tmp_path / 'absent.yaml'}: no such file"
 
 
 def test_config_folder_is_named():

@@ -1,13 +1,15 @@
 """The Snakemake workflow: config validation, the DAG of each preset, the SLURM profile.
 
-These run Snakemake itself (dry runs: no job executes).
+The DAGs run Snakemake itself (dry runs: no job executes); a bad config goes through the
+pre-flight command the Snakefile's gate runs (``helpers.preflight_check``; its wiring into
+Snakemake: tests/test_campaign_preflight.py).
 """
 import shutil
 
 import pytest
 import yaml
 
-from tests.helpers import ROOT, counts, dry_run, yade_module
+from tests.helpers import ROOT, counts, dry_run, preflight_check, yade_module
 
 
 def write_config(tmp_path, preset, **changes):
@@ -39,19 +41,18 @@ def test_every_preset_builds_a_dag(preset, workflow_dir):
         ({"timestep": {"dt_over_tc": 0.9}}, "dt_over_tc", "maximum of 0.3"),
     ],
 )
-def test_bad_config_value_stops_before_any_job_naming_key_and_range(tmp_path, workflow_dir, changes, key, allowed):
+def test_bad_config_value_stops_before_any_job_naming_key_and_range(tmp_path, changes, key, allowed):
     config = write_config(tmp_path, "ci", **changes)
-    result = dry_run("--configfile", config, cwd=workflow_dir)
-    message = result.stdout + result.stderr  # Snakemake prints the error on stdout
+    result = preflight_check(config)
     assert result.returncode != 0
-    assert key in message and allowed in message, message[-2000:]
+    assert key in result.stderr and allowed in result.stderr, result.stderr[-2000:]
 
 
-def test_unknown_config_key_is_rejected(tmp_path, workflow_dir):
+def test_unknown_config_key_is_rejected(tmp_path):
     config = write_config(tmp_path, "ci", cel={"H_over_d": 8})
-    result = dry_run("--configfile", config, cwd=workflow_dir)
+    result = preflight_check(config)
     assert result.returncode != 0
-    assert "'cel'" in result.stdout + result.stderr
+    assert "'cel'" in result.stderr
 
 
 def test_one_preshear_feeds_every_reversal(workflow_dir):
