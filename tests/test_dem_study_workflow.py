@@ -7,15 +7,15 @@ import pandas as pd
 import pytest
 import yaml
 
-from tests.helpers import ROOT, counts, dry_run, preflight_check, snakemake
+from tests.helpers import ROOT, counts, preflight_check, snakemake
 
 
-def test_paper_preset_plans_the_study_once_per_point(workflow_dir):
+def test_paper_preset_plans_the_study_once_per_point(shared_dry_run):
     from dem_study import grid
     config = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
     assert config["accuracy"]["dem_study"] is True
     n = len(grid.unique_points(grid.expand(config["accuracy"])))
-    result = dry_run("--configfile", "config/config.yaml", cwd=workflow_dir)
+    result = shared_dry_run("--configfile", "config/config.yaml")
     assert result.returncode == 0, result.stderr[-3000:]
     c = counts(result.stdout)
     assert c["dem_study"] == 1
@@ -24,10 +24,10 @@ def test_paper_preset_plans_the_study_once_per_point(workflow_dir):
 
 
 @pytest.mark.parametrize("preset", ["quick", "ci"])
-def test_small_presets_do_not_plan_the_study(preset, workflow_dir):
+def test_small_presets_do_not_plan_the_study(preset, shared_dry_run):
     config = yaml.safe_load((ROOT / "config" / f"{preset}.yaml").read_text())
     assert not config.get("accuracy", {}).get("dem_study", False)
-    result = dry_run("--configfile", f"config/{preset}.yaml", cwd=workflow_dir)
+    result = shared_dry_run("--configfile", f"config/{preset}.yaml")
     assert result.returncode == 0, result.stderr[-3000:]
     assert not any(rule.startswith("dem_study") for rule in counts(result.stdout))
 

@@ -9,7 +9,7 @@ import shutil
 import pytest
 import yaml
 
-from tests.helpers import ROOT, counts, dry_run, preflight_check, yade_module
+from tests.helpers import ROOT, counts, preflight_check, yade_module
 
 
 def write_config(tmp_path, preset, **changes):
@@ -26,8 +26,8 @@ def write_config(tmp_path, preset, **changes):
 
 
 @pytest.mark.parametrize("preset", ["config", "quick", "ci"])
-def test_every_preset_builds_a_dag(preset, workflow_dir):
-    result = dry_run("--configfile", f"config/{preset}.yaml", cwd=workflow_dir)
+def test_every_preset_builds_a_dag(preset, shared_dry_run):
+    result = shared_dry_run("--configfile", f"config/{preset}.yaml")
     assert result.returncode == 0, result.stderr[-3000:]
     assert "dem_preshear" in result.stdout
 
@@ -55,8 +55,8 @@ def test_unknown_config_key_is_rejected(tmp_path):
     assert "'cel'" in result.stderr
 
 
-def test_one_preshear_feeds_every_reversal(workflow_dir):
-    result = dry_run("--configfile", "config/ci.yaml", cwd=workflow_dir, quiet=False)
+def test_one_preshear_feeds_every_reversal(shared_dry_run):
+    result = shared_dry_run("--configfile", "config/ci.yaml", quiet=False)
     assert result.returncode == 0, result.stderr[-3000:]
     ci = yaml.safe_load((ROOT / "config" / "ci.yaml").read_text())
     n_cases = len(ci["seeds"]) * len(ci["loading"]["pressures"]) * len(ci["loading"]["inertial_numbers"])
@@ -66,8 +66,8 @@ def test_one_preshear_feeds_every_reversal(workflow_dir):
 
 
 @pytest.mark.skipif(shutil.which("sbatch") is not None, reason="a real cluster: do not touch it from tests")
-def test_slurm_profile_plans_the_paper_campaign(workflow_dir):
-    result = dry_run("--profile", "profiles/slurm", cwd=workflow_dir, quiet=False)
+def test_slurm_profile_plans_the_paper_campaign(shared_dry_run):
+    result = shared_dry_run("--profile", "profiles/slurm", quiet=False)
     assert result.returncode == 0, result.stderr[-3000:]
     assert "dem_preshear" in result.stdout
 
