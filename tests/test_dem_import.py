@@ -116,7 +116,8 @@ def pipeline(meta: Path, root: Path, sets: dict, protocols):
         assert done.returncode == 0, done.stdout[-2000:] + done.stderr
         done = run_cli("compare", "predict", "--dem", *dirs, "--params", str(root / "cal" / name / "params.yaml"),
                        "--set", name, "--protocols", *protocols, "--train-cases", *labels,
-                       "--train-protocols", *trained, "--out", str(root / "compare" / name))
+                       "--train-protocols", *trained, "--out", str(root / "compare" / name),
+                       "--figures")   # none drawn (as calibrate's --no-figures): no test reads them, 1.2 s each
         assert done.returncode == 0, done.stdout[-2000:] + done.stderr
     done = run_cli("claims", "--compare", str(root / "compare"), "--dem", *dirs, "--protocols", *protocols,
                    "--calibration", str(root / "cal" / "all" / "params.yaml"), "--sets", *sets,
