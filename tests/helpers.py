@@ -9,7 +9,9 @@ incomplete markers) and its default ``results/`` are its own, and two pytest-xdi
 share them. A module from ``yade_scripts/`` is loaded under a private name (``yade_module``)
 without putting that folder on ``sys.path`` for the whole run.
 """
+import contextlib
 import importlib.util
+import io
 import json
 import os
 import signal
@@ -308,6 +310,20 @@ def counts(stdout):
         if len(parts) == 2 and parts[1].isdigit():
             out[parts[0]] = int(parts[1])
     return out
+
+
+def preflight_check(*configfiles):
+    """``python -m preflight check configfiles...``, in-process (the Snakefile's gate runs the same
+    ``preflight.check`` before any job, in milliseconds rather than a dry run's seconds): a
+    CompletedProcess with its exit code and stderr. tests/test_campaign_preflight.py runs
+    representative cases through the real ``snakemake -n`` as well."""
+    from preflight.__main__ import main
+
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()) as out:
+        code = main(["check", *map(str, configfiles)])
+    return subprocess.CompletedProcess(["python", "-m", "preflight", "check", *map(str, configfiles)], code,
+                                       out.getvalue(), err.getvalue())
 
 
 def workflow_rules(workdir, configfile):

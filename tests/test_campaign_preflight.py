@@ -1,9 +1,13 @@
 """Bad config is stopped before any job, by the schema and preflight/checks.py, naming the key.
 
-Every case runs the real ``snakemake --dry-run`` on a copy of the CI preset with
-one thing wrong (about 1.5 s each, two at a time); a few run the pre-flight
-function directly. A case passes when Snakemake exits with code 2, plans no job,
-and its message names the key (and, where given, the allowed value).
+Every case is a copy of the CI preset with one thing wrong. Each goes through the
+pre-flight's own command (``python -m preflight check FILE``, called in-process:
+the Snakefile's gate runs the same ``preflight.check``); a case passes when it
+exits with code 2 and its message names the key (and, where given, the allowed
+value). A few representative cases (``END_TO_END``: a schema range, a cross-key
+check, a duplicated key with its lines, a calibrate option, a results folder) also
+run the real ``snakemake --dry-run`` (about 2.7 s of CPU each), which must exit
+with code 2, plan no job, and print the very lines the command printed.
 """
 import copy
 import math
@@ -15,7 +19,7 @@ import pytest
 import yaml
 
 import preflight
-from tests.helpers import ROOT, snakemake, workflow_copy
+from tests.helpers import ROOT, preflight_check, snakemake, workflow_copy
 
 CI = yaml.safe_load((ROOT / "config" / "ci.yaml").read_text())
 # without extra calibrate options: checking them imports calibrate (seconds), needed only by their own cases
@@ -132,6 +136,32 @@ def config_text(edit):
     return yaml.safe_dump(config)
 
 
+#: Cases also run through the real Snakemake dry run: one of each kind of check, so that the
+#: Snakefile's wiring (exit 2 before the DAG, no traceback, the file:line) stays tested end to end.
+END_TO_END = ["schema_range", "bulk_exclusion_fills_the_gap", "duplicated_key", "calibration_option_misspelt",
+              "results_dir_code_folder"]
+
+
+def write_case(folder, name):
+    path = folder / f"{name}.yaml"
+    path.write_text(config_text(CASES[name][0]))
+    return path
+
+
+def assert_names_the_key(name, path, message):
+    for words in CASES[name][1]:
+        assert words.replace(".yaml:", f"{path.name}:") in message, (words, message[-2000:])
+
+
+@pytest.mark.parametrize("name", list(CASES))
+def test_bad_config_is_refused_by_the_preflight_naming_the_key(tmp_path, name):
+    path = write_case(tmp_path, name)
+    result = preflight_check(path)
+    assert result.returncode == 2, result.stderr[-2000:]
+    assert result.stderr.strip() and "Traceback" not in result.stderr, result.stderr[-2000:]
+    assert_names_the_key(name, path, result.stderr)
+
+
 def dry_run(path):
     """The dry run of config ``path`` in a working copy of its own (next to the file)."""
     return snakemake("-n", "--configfile", path, cwd=workflow_copy(path.parent / f"{path.stem}-workflow"))
@@ -139,25 +169,23 @@ def dry_run(path):
 
 @pytest.fixture(scope="module")
 def dry_runs(tmp_path_factory):
-    """Every case's dry run, two at a time: name -> (config path, CompletedProcess)."""
+    """The END_TO_END cases' dry runs, two at a time: name -> (config path, CompletedProcess)."""
     tmp = tmp_path_factory.mktemp("preflight")
-    paths = {}
-    for name, (edit, _) in CASES.items():
-        paths[name] = tmp / f"{name}.yaml"
-        paths[name].write_text(config_text(edit))
+    paths = {name: write_case(tmp, name) for name in END_TO_END}
     with ThreadPoolExecutor(max_workers=2) as pool:
         results = dict(zip(paths, pool.map(dry_run, paths.values())))
     return {name: (paths[name], results[name]) for name in paths}
 
 
-@pytest.mark.parametrize("name", list(CASES))
-def test_bad_config_stops_before_any_job_naming_the_key(dry_runs, name):
+@pytest.mark.parametrize("name", END_TO_END)
+def test_bad_config_stops_snakemake_before_any_job_with_the_preflights_lines(dry_runs, name):
     path, result = dry_runs[name]
     message = result.stdout + result.stderr
     assert result.returncode == 2, message[-2000:]
     assert "Traceback" not in message and "Building DAG" not in message, message[-2000:]
-    for words in CASES[name][1]:
-        assert words.replace(".yaml:", f"{path.name}:") in message, (words, message[-2000:])
+    assert_names_the_key(name, path, message)
+    lines = preflight_check(path).stderr
+    assert lines.strip() and all(line in message for line in lines.splitlines()), (lines, message[-2000:])
 
 
 @pytest.mark.parametrize("preset", ["config", "quick", "ci"])
@@ -211,12 +239,18 @@ def test_config_file_that_cannot_be_read_is_named_with_its_line(tmp_path, text, 
     path = tmp_path / "bad.yaml"
     if text is not None:
         path.write_text(text)
-    result = subprocess.run([sys.executable, "-m", "preflight", "check", str(path)],
-                            cwd=ROOT, capture_output=True, text=True, timeout=60)
+    result = preflight_check(path)
     assert result.returncode == 2
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1 and "Traceback" not in result.stderr, result.stderr
     assert all(w in lines[0] for w in words), lines[0]
+
+
+def test_the_preflight_command_exits_2_with_one_line_naming_a_file_it_cannot_read(tmp_path):
+    result = subprocess.run([sys.executable, "-m", "preflight", "check", str(tmp_path / "absent.yaml")],
+                            cwd=ROOT, capture_output=True, text=True, timeout=60)
+    assert result.returncode == 2 and "Traceback" not in result.stderr, result.stderr
+    assert result.stderr.strip() == f"config error: {tmp_path / 'absent.yaml'}: no such file"
 
 
 def test_config_folder_is_named():

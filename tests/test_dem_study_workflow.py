@@ -1,20 +1,21 @@
-"""The DEM resolution study in the workflow: planned with accuracy.dem_study on, absent with it off,
-and the schema stops a bad study value before any job."""
+"""The DEM resolution study in the workflow: planned with accuracy.dem_study on, absent with it off
+(Snakemake's dry runs), and the schema stops a bad study value before any job (the pre-flight command
+the Snakefile's gate runs, ``helpers.preflight_check``)."""
 import shutil
 
 import pandas as pd
 import pytest
 import yaml
 
-from tests.helpers import ROOT, counts, dry_run, snakemake
+from tests.helpers import ROOT, counts, preflight_check, snakemake
 
 
-def test_paper_preset_plans_the_study_once_per_point(workflow_dir):
+def test_paper_preset_plans_the_study_once_per_point(shared_dry_run):
     from dem_study import grid
     config = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
     assert config["accuracy"]["dem_study"] is True
     n = len(grid.unique_points(grid.expand(config["accuracy"])))
-    result = dry_run("--configfile", "config/config.yaml", cwd=workflow_dir)
+    result = shared_dry_run("--configfile", "config/config.yaml")
     assert result.returncode == 0, result.stderr[-3000:]
     c = counts(result.stdout)
     assert c["dem_study"] == 1
@@ -23,21 +24,21 @@ def test_paper_preset_plans_the_study_once_per_point(workflow_dir):
 
 
 @pytest.mark.parametrize("preset", ["quick", "ci"])
-def test_small_presets_do_not_plan_the_study(preset, workflow_dir):
+def test_small_presets_do_not_plan_the_study(preset, shared_dry_run):
     config = yaml.safe_load((ROOT / "config" / f"{preset}.yaml").read_text())
     assert not config.get("accuracy", {}).get("dem_study", False)
-    result = dry_run("--configfile", f"config/{preset}.yaml", cwd=workflow_dir)
+    result = shared_dry_run("--configfile", f"config/{preset}.yaml")
     assert result.returncode == 0, result.stderr[-3000:]
     assert not any(rule.startswith("dem_study") for rule in counts(result.stdout))
 
 
-def test_bad_study_value_stops_before_any_job(tmp_path, workflow_dir):
+def test_bad_study_value_stops_before_any_job(tmp_path):
     config = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
     config["accuracy"]["dem_grid"]["dt_over_tc"] = [0.5, 0.1]
     path = tmp_path / "config.yaml"
     path.write_text(yaml.safe_dump(config))
-    result = dry_run("--configfile", path, cwd=workflow_dir)
-    message = result.stdout + result.stderr
+    result = preflight_check(path)
+    message = result.stderr
     assert result.returncode != 0
     assert "dt_over_tc" in message and "maximum of 0.3" in message, message[-2000:]
 

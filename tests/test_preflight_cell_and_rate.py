@@ -1,19 +1,19 @@
 """The pre-flight check names a wall cell's key given to a periodic cell, and a loading with no rate.
 
-Each case runs the real ``snakemake --dry-run`` on a copy of the CI preset with
-one thing wrong: Snakemake must exit with code 2, plan no job, and name the
-key and what is allowed; the unchanged preset (and its periodic variant without
-the wall cell's key) must pass.
+Each case runs the pre-flight command the Snakefile's gate runs (``python -m preflight
+check``, in-process: ``helpers.preflight_check``; its wiring into Snakemake is
+tests/test_campaign_preflight.py) on a copy of the CI preset with one thing wrong:
+it must exit with code 2 and name the key and what is allowed; the unchanged preset
+(and its periodic variant without the wall cell's key) must pass.
 """
 import copy
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 import yaml
 
 import preflight
+from tests.helpers import preflight_check
 
 ROOT = Path(__file__).resolve().parents[1]
 CI = yaml.safe_load((ROOT / "config" / "ci.yaml").read_text())
@@ -24,20 +24,19 @@ def periodic(config):
     config["cell"].update(kind="periodic", W_over_H=1)
 
 
-def dry_run(config, tmp_path):
+def check(config, tmp_path):
     config = copy.deepcopy(config)
     config["results_dir"] = str(tmp_path / "results")
     path = tmp_path / "config.yaml"
     path.write_text(yaml.safe_dump(config))
-    return subprocess.run([sys.executable, "-m", "snakemake", "-n", "--quiet", "rules", "--configfile", str(path)],
-                          cwd=ROOT, capture_output=True, text=True, timeout=300)
+    return preflight_check(path)
 
 
 def test_periodic_cell_given_the_wall_cells_bulk_band_is_refused(tmp_path):
     config = copy.deepcopy(CI)
     periodic(config)
-    result = dry_run(config, tmp_path)
-    assert result.returncode == 2, result.stdout[-1000:] + result.stderr[-2000:]
+    result = check(config, tmp_path)
+    assert result.returncode == 2, result.stderr[-2000:]
     assert ("config error: sampling.bulk_exclusion_d = 2: applies to a wall cell only" in result.stderr
             and "(allowed: leave it out, or set cell.kind: walls)" in result.stderr), result.stderr[-2000:]
 
@@ -54,8 +53,8 @@ def test_periodic_cell_without_wall_keys_and_the_wall_cell_pass_the_check():
 def test_loading_without_a_rate_names_the_two_keys_it_accepts(tmp_path, loading):
     config = copy.deepcopy(CI)
     config["loading"] = loading
-    result = dry_run(config, tmp_path)
-    assert result.returncode == 2, result.stdout[-1000:] + result.stderr[-2000:]
+    result = check(config, tmp_path)
+    assert result.returncode == 2, result.stderr[-2000:]
     assert "loading.inertial_numbers" in result.stderr and "loading.wall_velocities" in result.stderr
     assert "not valid under any of the given schemas" not in result.stderr, result.stderr[-2000:]
 

@@ -39,8 +39,8 @@ def bench_command():
     return words[words.index(next(w for w in words if w.endswith("snakemake"))) + 1:]
 
 
-def test_the_quick_preset_plans_the_study_and_no_benchmark_of_the_code(code_benchmarks, workflow_dir):
-    result = dry_run("--configfile", "config/quick.yaml", cwd=workflow_dir)
+def test_the_quick_preset_plans_the_study_and_no_benchmark_of_the_code(code_benchmarks, shared_dry_run):
+    result = shared_dry_run("--configfile", "config/quick.yaml")
     assert result.returncode == 0, result.stderr[-3000:]
     jobs = counts(result.stdout)
     assert not code_benchmarks & set(jobs), sorted(code_benchmarks & set(jobs))
@@ -69,11 +69,11 @@ def planned_priorities(stdout):
     return {(rule, wildcards): priority for rule, wildcards, priority in jobs}
 
 
-def test_the_quick_preset_runs_the_dem_longest_chain_first_then_the_largest_calibration_set(workflow_dir):
+def test_the_quick_preset_runs_the_dem_longest_chain_first_then_the_largest_calibration_set(shared_dry_run):
     """On 2 cores no long job should end the study alone: the DEM (it gates every set but the per-I
     ones) before anything else, the I = 2e-3 chains before the 3 times cheaper I = 5e-3 ones, then
     the set "all" (the largest) before the others."""
-    result = dry_run("--configfile", "config/quick.yaml", cwd=workflow_dir, quiet=False)
+    result = shared_dry_run("--configfile", "config/quick.yaml", quiet=False)
     assert result.returncode == 0, result.stderr[-3000:]
     prio = planned_priorities(result.stdout)
     dem = {k: v for k, v in prio.items() if k[0] in ("scene", "dem_pack", "dem_preshear", "dem_reversal")}

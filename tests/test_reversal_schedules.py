@@ -206,16 +206,49 @@ def schedule_scene(kind, segments, **run):
     return sc
 
 
+#: What the schedule's stage starts from: the pack and the pre-shear (the scene's schedules do not change them).
+PRESHEAR_FILES = ("pack.final.yade.gz", "pack.json", "preshear.final.yade.gz", "preshear.json", "preshear.csv")
+
+
+@pytest.fixture(scope="module")
+def preshear_of(tmp_path_factory):
+    """kind -> a case folder holding the pack and the pre-shear of that cell kind, each run once for the module
+    (every schedule below starts from them, as the campaign's reversals start from one pre-shear)."""
+    done = {}
+
+    def of(kind):
+        if kind not in done:
+            root = tmp_path_factory.mktemp(f"preshear_{kind}")
+            scene = root / "scene.json"
+            scene.write_text(json.dumps(schedule_scene(kind, SCHEDULES[kind])))
+            cdir = root / "p100000_I0.01_s1"
+            for stage in ("pack", "preshear"):
+                r = yade(RUN, scene, stage, cdir)
+                assert r.returncode == 0, f"{stage}: {r.stdout[-2000:]}\n{r.stderr[-2000:]}"
+            done[kind] = cdir
+        return done[kind]
+    return of
+
+
+def schedule_case(preshear_of, root, kind, segments, **run):
+    """A case under ``root`` with the module's pack and pre-shear of ``kind`` and a scene scheduling ``segments``:
+    (scene, case folder)."""
+    cdir = root / "p100000_I0.01_s1"
+    cdir.mkdir(parents=True)
+    for f in PRESHEAR_FILES:
+        shutil.copy(preshear_of(kind) / f, cdir / f)
+    scene = root / "scene.json"
+    scene.write_text(json.dumps(schedule_scene(kind, segments, **run)))
+    return scene, cdir
+
+
 @pytest.fixture(scope="module", params=["walls", "periodic"])
-def yade_schedule(request, tmp_path_factory):
+def yade_schedule(request, tmp_path_factory, preshear_of):
     kind = request.param
     root = tmp_path_factory.mktemp(f"sched_{kind}")
-    scene = root / "scene.json"
-    scene.write_text(json.dumps(schedule_scene(kind, SCHEDULES[kind])))
-    cdir = root / "p100000_I0.01_s1"
-    for stage in ("pack", "preshear", "double"):
-        r = yade(RUN, scene, stage, cdir)
-        assert r.returncode == 0, f"{stage}: {r.stdout[-2000:]}\n{r.stderr[-2000:]}"
+    scene, cdir = schedule_case(preshear_of, root, kind, SCHEDULES[kind])
+    r = yade(RUN, scene, "double", cdir)
+    assert r.returncode == 0, f"double: {r.stdout[-2000:]}\n{r.stderr[-2000:]}"
     return dict(kind=kind, dir=cdir, scene=scene, root=root)
 
 
@@ -262,19 +295,15 @@ def test_a_schedule_samples_finely_again_after_each_reversal(yade_schedule):
 
 @pytest.mark.yade
 @pytest.mark.slow
-def test_a_schedule_killed_in_its_second_segment_resumes_with_no_gap_and_no_duplicated_row(yade_schedule, tmp_path):
+def test_a_schedule_killed_in_its_second_segment_resumes_with_no_gap_and_no_duplicated_row(yade_schedule, preshear_of,
+                                                                                          tmp_path):
     if yade_schedule["kind"] != "walls":
         pytest.skip("the resume path is the same for both cell kinds; the periodic cell's own resume is "
                     "tests/test_dem_periodic.py")
     segments = [{"strain": 0.1, "direction": -1}, {"strain": 0.9, "direction": 1}]
     runs = {}
     for name, kill in (("reference", False), ("killed", True)):
-        cdir = tmp_path / name / "case"
-        cdir.mkdir(parents=True)
-        for f in ("pack.final.yade.gz", "pack.json", "preshear.final.yade.gz", "preshear.json", "preshear.csv"):
-            shutil.copy(yade_schedule["dir"] / f, cdir / f)
-        scene = tmp_path / name / "scene.json"
-        scene.write_text(json.dumps(schedule_scene("walls", segments, checkpoint_every_s=1)))
+        scene, cdir = schedule_case(preshear_of, tmp_path / name, "walls", segments, checkpoint_every_s=1)
         if kill:
             t2 = json.loads(runs["reference"][1])["reversals"][1]["t"]
             rows_before = int(np.sum(runs["reference"][0]["t"] <= t2))
@@ -313,16 +342,13 @@ def test_the_comparison_scores_each_reversal_of_a_schedule_as_one_transient(two_
 
 
 @pytest.mark.yade
-def test_a_schedule_that_first_continues_the_pre_shear_runs_and_reverses_where_scheduled(tmp_path):
+def test_a_schedule_that_first_continues_the_pre_shear_runs_and_reverses_where_scheduled(preshear_of, tmp_path):
     """A first segment in the pre-shear's direction (no reversal) runs, sampled finely from its start, and
     the one reversal comes after it (this stage failed with KeyError 'fine_end' before its fix)."""
     segments = [{"strain": 0.1, "direction": 1}, {"strain": 0.15, "direction": -1}]
-    scene = tmp_path / "scene.json"
-    scene.write_text(json.dumps(schedule_scene("walls", segments)))
-    cdir = tmp_path / "p100000_I0.01_s1"
-    for stage in ("pack", "preshear", "double"):
-        r = yade(RUN, scene, stage, cdir)
-        assert r.returncode == 0, f"{stage}: {r.stdout[-2000:]}\n{r.stderr[-2000:]}"
+    scene, cdir = schedule_case(preshear_of, tmp_path, "walls", segments)
+    r = yade(RUN, scene, "double", cdir)
+    assert r.returncode == 0, f"double: {r.stdout[-2000:]}\n{r.stderr[-2000:]}"
     side = json.loads((cdir / "double.json").read_text())
     assert [r["direction"] for r in side["reversals"]] == [-1]
     I, step = side["inertial_number"], side["gammadot_nominal"] * side["dt"]

@@ -14,15 +14,16 @@ import time
 
 import pytest
 
-from tests.helpers import ROOT, SNAKEMAKE, dry_run, workflow_copy
+from tests.helpers import ROOT, SNAKEMAKE, workflow_copy
 
 README_ARGS = ["--default-resources", "slurm_account=ACCOUNT", "slurm_partition=PARTITION"]
 LOCAL_RULES = {"all", "scene", "dem_study_scene", "dem_study_points"}
 
 
-def planned_resources(workdir, *args):
-    """rule -> list of resource dicts, one per planned job, from a dry run in the working copy ``workdir``."""
-    result = dry_run("--profile", "profiles/slurm", *args, cwd=workdir, quiet=False)
+def planned_resources(shared_dry_run, *args):
+    """rule -> list of resource dicts, one per planned job, from a dry run (``shared_dry_run``: the
+    profile's own is planned once for the tests here and tests/test_workflow.py)."""
+    result = shared_dry_run("--profile", "profiles/slurm", *args, quiet=False)
     assert result.returncode == 0, result.stderr[-3000:]
     jobs, rule = {}, None
     for line in (result.stdout + result.stderr).splitlines():
@@ -35,8 +36,8 @@ def planned_resources(workdir, *args):
 
 
 @pytest.mark.parametrize("extra", [[], README_ARGS], ids=["profile", "readme-command"])
-def test_every_cluster_job_gets_a_runtime_and_memory(extra, workflow_dir):
-    jobs = planned_resources(workflow_dir, *extra)
+def test_every_cluster_job_gets_a_runtime_and_memory(extra, shared_dry_run):
+    jobs = planned_resources(shared_dry_run, *extra)
     assert "dem_preshear" in jobs and "dem_study_preshear" in jobs, sorted(jobs)
     for rule, planned in jobs.items():
         if rule in LOCAL_RULES:
@@ -47,8 +48,8 @@ def test_every_cluster_job_gets_a_runtime_and_memory(extra, workflow_dir):
         assert all(res["slurm_account"] == "ACCOUNT" for res in jobs["dem_preshear"])
 
 
-def test_dem_runtime_follows_the_scene_not_a_flat_default(workflow_dir):
-    jobs = planned_resources(workflow_dir)
+def test_dem_runtime_follows_the_scene_not_a_flat_default(shared_dry_run):
+    jobs = planned_resources(shared_dry_run)
     preshear = [int(res["runtime"]) for res in jobs["dem_preshear"]]
     # the paper cell: about 5,000 disks, 2.1 h per unit strain, a 2-strain pre-shear: 4 h x 3
     assert min(preshear) > 8 * 60, preshear

@@ -1,13 +1,15 @@
 """The Snakemake workflow: config validation, the DAG of each preset, the SLURM profile.
 
-These run Snakemake itself (dry runs: no job executes).
+The DAGs run Snakemake itself (dry runs: no job executes); a bad config goes through the
+pre-flight command the Snakefile's gate runs (``helpers.preflight_check``; its wiring into
+Snakemake: tests/test_campaign_preflight.py).
 """
 import shutil
 
 import pytest
 import yaml
 
-from tests.helpers import ROOT, counts, dry_run, yade_module
+from tests.helpers import ROOT, counts, preflight_check, yade_module
 
 
 def write_config(tmp_path, preset, **changes):
@@ -24,8 +26,8 @@ def write_config(tmp_path, preset, **changes):
 
 
 @pytest.mark.parametrize("preset", ["config", "quick", "ci"])
-def test_every_preset_builds_a_dag(preset, workflow_dir):
-    result = dry_run("--configfile", f"config/{preset}.yaml", cwd=workflow_dir)
+def test_every_preset_builds_a_dag(preset, shared_dry_run):
+    result = shared_dry_run("--configfile", f"config/{preset}.yaml")
     assert result.returncode == 0, result.stderr[-3000:]
     assert "dem_preshear" in result.stdout
 
@@ -39,23 +41,22 @@ def test_every_preset_builds_a_dag(preset, workflow_dir):
         ({"timestep": {"dt_over_tc": 0.9}}, "dt_over_tc", "maximum of 0.3"),
     ],
 )
-def test_bad_config_value_stops_before_any_job_naming_key_and_range(tmp_path, workflow_dir, changes, key, allowed):
+def test_bad_config_value_stops_before_any_job_naming_key_and_range(tmp_path, changes, key, allowed):
     config = write_config(tmp_path, "ci", **changes)
-    result = dry_run("--configfile", config, cwd=workflow_dir)
-    message = result.stdout + result.stderr  # Snakemake prints the error on stdout
+    result = preflight_check(config)
     assert result.returncode != 0
-    assert key in message and allowed in message, message[-2000:]
+    assert key in result.stderr and allowed in result.stderr, result.stderr[-2000:]
 
 
-def test_unknown_config_key_is_rejected(tmp_path, workflow_dir):
+def test_unknown_config_key_is_rejected(tmp_path):
     config = write_config(tmp_path, "ci", cel={"H_over_d": 8})
-    result = dry_run("--configfile", config, cwd=workflow_dir)
+    result = preflight_check(config)
     assert result.returncode != 0
-    assert "'cel'" in result.stdout + result.stderr
+    assert "'cel'" in result.stderr
 
 
-def test_one_preshear_feeds_every_reversal(workflow_dir):
-    result = dry_run("--configfile", "config/ci.yaml", cwd=workflow_dir, quiet=False)
+def test_one_preshear_feeds_every_reversal(shared_dry_run):
+    result = shared_dry_run("--configfile", "config/ci.yaml", quiet=False)
     assert result.returncode == 0, result.stderr[-3000:]
     ci = yaml.safe_load((ROOT / "config" / "ci.yaml").read_text())
     n_cases = len(ci["seeds"]) * len(ci["loading"]["pressures"]) * len(ci["loading"]["inertial_numbers"])
@@ -65,8 +66,8 @@ def test_one_preshear_feeds_every_reversal(workflow_dir):
 
 
 @pytest.mark.skipif(shutil.which("sbatch") is not None, reason="a real cluster: do not touch it from tests")
-def test_slurm_profile_plans_the_paper_campaign(workflow_dir):
-    result = dry_run("--profile", "profiles/slurm", cwd=workflow_dir, quiet=False)
+def test_slurm_profile_plans_the_paper_campaign(shared_dry_run):
+    result = shared_dry_run("--profile", "profiles/slurm", quiet=False)
     assert result.returncode == 0, result.stderr[-3000:]
     assert "dem_preshear" in result.stdout
 
