@@ -13,7 +13,7 @@ import pandas as pd
 from dem_contract import fabric_angle_deg, fabric_norm
 from model import default_params, params_from_dict, steady_state
 
-from . import (backsolve, bootstrap, figures, fits, freeform, identifiability, io, profiles, route1, route2,
+from . import (backsolve, bootstrap, fits, freeform, identifiability, io, profiles, route1, route2,
                shear_stability, smoothing, tables)
 
 BLOCKS = ("friction_eq2", "friction_quadratic", "model1", "model2")
@@ -557,8 +557,9 @@ def write_identifiability(out: Path, prof, svd, verdict) -> None:
 
 
 def write_figures(out: Path, samples, replays, btab, doc1, doc2, final, default_route, settings: Settings,
-                  log, free=None) -> None:
-    """Step 10: Fig. 2a, 2b, 3a, 3b and the default routes' curves against the DEM's."""
+                  log, free=None, profile_tables=None) -> None:
+    """Step 10: Fig. 2a, 2b, 3a, 3b, the default routes' curves against the DEM's and the profiles."""
+    from . import figures   # matplotlib only where a figure is drawn: the pre-flight's options check imports this package
     X, mu = route1.friction_data(samples, settings.backsolve)
     figures.fig2a(samples, out / "fig2a_stress_vs_Axy.png")
     figures.fig2b(X, mu, doc1["friction_eq2"], doc1["friction_quadratic"], out / "fig2b_mu_vs_X.png")
@@ -576,6 +577,8 @@ def write_figures(out: Path, samples, replays, btab, doc1, doc2, final, default_
         except (ValueError, RuntimeError) as exc:
             log(f"figure: {model} cannot be integrated ({exc})")
     figures.fig_curves(replays, preds, out / "fig_curves_model_vs_dem.png")
+    if profile_tables is not None:
+        figures.fig_profiles(*profile_tables, out / "fig_profiles.png")
 
 
 def run(case_dirs, out, settings: Settings = Settings(), log=print, argv=None) -> dict:
@@ -618,8 +621,8 @@ def run(case_dirs, out, settings: Settings = Settings(), log=print, argv=None) -
     write_tables(out, final, ptab, btab, quality, heldout, values)
     write_identifiability(out, prof, svd, verdict)
     if settings.figures:
-        write_figures(out, samples, replays, btab, doc1, doc2, final, default_route, settings, log, free)
-        figures.fig_profiles(prof, prof_iv, out / "fig_profiles.png")
+        write_figures(out, samples, replays, btab, doc1, doc2, final, default_route, settings, log, free,
+                      profile_tables=(prof, prof_iv))
     log(f"wrote {out} ({time.time() - t0:.1f} s); default routes: {default_route}")
     return {"default_route": default_route, "params": final, "route1": r1, "route2": r2, "intervals": iv,
             "quality": pd.DataFrame(quality), "steady": steady, "steady_check": steady_check(final),
