@@ -10,8 +10,6 @@ given, so no YADE runs. Each test edits a copy of the config and asks Snakemake
 """
 import copy
 import re
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
@@ -19,10 +17,8 @@ import yaml
 
 from dem_contract import synthetic
 from model import default_params
-from tests.helpers import TINY
+from tests.helpers import TINY, snakemake, workflow_copy
 
-ROOT = Path(__file__).resolve().parents[1]
-SNAKEMAKE = [sys.executable, "-m", "snakemake"]
 GROUP = "p100000_I0.01"
 
 CONFIG = {
@@ -50,10 +46,11 @@ def targets(config):
     return [f"{config['results_dir']}/calibration/{name}/params.yaml" for name in sets]
 
 
-def snakemake(config, path, *args):
-    return subprocess.run([*SNAKEMAKE, *targets(config), "--allowed-rules", "calibrate",
-                           "--configfile", str(write(config, path)), *args],
-                          cwd=ROOT, capture_output=True, text=True, timeout=600)
+def calibrate_sets(config, path, *args):
+    """Snakemake asked for every set's params.yaml with only the calibrate rule allowed, in a private
+    working copy of the workflow next to ``path`` (its own .snakemake/, where the rerun triggers live)."""
+    return snakemake(*targets(config), "--allowed-rules", "calibrate", "--configfile", write(config, path), *args,
+                     cwd=workflow_copy(path.parent / "workflow"), timeout=600)
 
 
 @pytest.fixture(scope="module")
@@ -64,7 +61,7 @@ def finished(tmp_path_factory):
     config["results_dir"] = str(tmp / "results")
     synthetic.write_ensemble(tmp / "results" / "dem", default_params(), seeds=(1, 2, 3), group=GROUP, I=0.01,
                              fabric_noise=synthetic.FABRIC_NOISE, mu_noise=synthetic.MU_NOISE)
-    result = snakemake(config, tmp / "config.yaml", "-j1")
+    result = calibrate_sets(config, tmp / "config.yaml", "-j1")
     assert result.returncode == 0, result.stdout[-2000:] + result.stderr[-3000:]
     return config, tmp
 
@@ -75,9 +72,9 @@ def planned_sets(finished, edit, name):
     config, tmp = finished
     changed = copy.deepcopy(config)
     edit(changed)
-    dry = snakemake(changed, tmp / f"{name}.yaml", "-n")
+    dry = calibrate_sets(changed, tmp / f"{name}.yaml", "-n")
     assert dry.returncode == 0, dry.stdout[-2000:] + dry.stderr[-2000:]
-    summary = snakemake(changed, tmp / f"{name}.yaml", "--summary")
+    summary = calibrate_sets(changed, tmp / f"{name}.yaml", "--summary")
     assert summary.returncode == 0, summary.stderr[-2000:]
     stale = [line.split("\t")[0] for line in summary.stdout.splitlines()
              if line.split("\t")[-2:] == ["missing", "no update"]]

@@ -25,9 +25,9 @@ import yaml
 from dem_contract import DEMInputError, read_series, release, synthetic
 from dem_contract.importer import import_cases
 from model import default_params
+from tests.helpers import counts, dry_run, snakemake
 
 ROOT = Path(__file__).resolve().parents[1]
-SNAKEMAKE = [sys.executable, "-m", "snakemake"]
 DEM_RULES = ("scene", "dem_pack", "dem_preshear", "dem_reversal")
 SEEDS = [1, 2, 3]
 COMMITTED = sorted(p.parent for p in (ROOT / "data").glob("*/manifest.yaml"))
@@ -48,10 +48,6 @@ def write(config, path):
     return path
 
 
-def snakemake(*args, timeout=900):
-    return subprocess.run([*SNAKEMAKE, *map(str, args)], cwd=ROOT, capture_output=True, text=True, timeout=timeout)
-
-
 def planned_jobs(stdout) -> dict:
     """Rule -> job count from a dry run's job table."""
     counts = {}
@@ -63,14 +59,15 @@ def planned_jobs(stdout) -> dict:
 
 
 @pytest.fixture(scope="module")
-def released(tmp_path_factory):
+def released(tmp_path_factory, module_workflow_dir):
     """The finished campaign (through its claims) and its release: (config path, results, release folder)."""
     if shutil.which("yade") is None:
         pytest.skip("needs YADE (Debian package yade)")
     tmp = tmp_path_factory.mktemp("release")
     results = tmp / "results"
     config = write(campaign_config(results), tmp / "config.yaml")
-    run = snakemake("-j1", results / "claims" / "paper_claims.csv", "--configfile", config, "--quiet")
+    run = snakemake("-j1", results / "claims" / "paper_claims.csv", "--configfile", config, "--quiet",
+                    cwd=module_workflow_dir, timeout=900)
     assert run.returncode == 0, run.stderr[-3000:]
     out = tmp / "data" / "tiny"
     made = subprocess.run([sys.executable, "-m", "dem_contract", "release", "--cases",
@@ -213,12 +210,13 @@ def test_release_into_a_non_empty_folder_is_refused(released):
 @pytest.mark.yade
 @pytest.mark.slow
 @pytest.mark.heavy
-def test_claims_recomputed_from_the_release_alone_are_byte_identical(released, tmp_path):
+def test_claims_recomputed_from_the_release_alone_are_byte_identical(released, module_workflow_dir, tmp_path):
     """26.4a: no YADE job runs, and paper_claims.csv and power.csv equal the original campaign's byte for byte."""
     _, results, out = released
     fresh = tmp_path / "results"
     config = write(campaign_config(fresh, release=str(out)), tmp_path / "config.yaml")
-    run = snakemake("-j1", fresh / "claims" / "paper_claims.csv", "--configfile", config)
+    run = snakemake("-j1", fresh / "claims" / "paper_claims.csv", "--configfile", config, cwd=module_workflow_dir,
+                    timeout=900)
     assert run.returncode == 0, run.stderr[-3000:]
     ran = run.stderr + run.stdout
     assert "rule release_case:" in ran and not any(f"rule {r}:" in ran for r in DEM_RULES)
@@ -230,19 +228,19 @@ def test_claims_recomputed_from_the_release_alone_are_byte_identical(released, t
 @pytest.mark.yade
 @pytest.mark.slow
 @pytest.mark.heavy
-def test_adding_a_seed_plans_only_the_new_seeds_dem(released, tmp_path):
+def test_adding_a_seed_plans_only_the_new_seeds_dem(released, module_workflow_dir, tmp_path):
     """26.3/26.4b: with seeds 1-3 released and seed 4 added, the dry run's DEM jobs are seed 4's alone."""
     _, _, out = released
     config = write(campaign_config(tmp_path / "results", seeds=[*SEEDS, 4], release=str(out)),
                    tmp_path / "config.yaml")
     run = snakemake("-n", tmp_path / "results" / "claims" / "paper_claims.csv", "--configfile", config,
-                    "--quiet", "rules", timeout=300)
+                    "--quiet", "rules", cwd=module_workflow_dir, timeout=300)
     assert run.returncode == 0, run.stderr[-3000:]
     jobs = planned_jobs(run.stdout)
     assert {rule: jobs.get(rule, 0) for rule in (*DEM_RULES, "release_case")} == {
         "scene": 1, "dem_pack": 1, "dem_preshear": 1, "dem_reversal": 2, "release_case": 3}
     listed = snakemake("-n", tmp_path / "results" / "claims" / "paper_claims.csv", "--configfile", config,
-                       timeout=300)
+                       cwd=module_workflow_dir, timeout=300)
     dem_jobs = [block for block in listed.stdout.split("\n\n") if any(f"rule {r}:" in block for r in DEM_RULES)]
     assert dem_jobs and all("p100000_I0.01_s4" in block for block in dem_jobs)
 
@@ -251,7 +249,7 @@ def test_adding_a_seed_plans_only_the_new_seeds_dem(released, tmp_path):
 @pytest.mark.slow
 @pytest.mark.skipif(not RUN_RELEASE_DEM, reason="opt-in: RUN_RELEASE_DEM=1 (re-runs a released case's DEM)")
 @pytest.mark.heavy
-def test_released_case_dem_reruns_identically(released, tmp_path):
+def test_released_case_dem_reruns_identically(released, module_workflow_dir, tmp_path):
     """26.4c: one released case's DEM, re-run from scratch from its manifest's config, equals the release.
 
     The committed releases' first case (the test-made release when none is committed):
@@ -262,7 +260,8 @@ def test_released_case_dem_reruns_identically(released, tmp_path):
     label, case = next(iter(manifest["cases"].items()))
     config = dict(manifest["config"], results_dir=str(tmp_path / "results"), release=[])
     targets = [tmp_path / "results" / case["source"] / label / f"{p}.csv" for p in case["protocols"]]
-    run = snakemake("-j1", *targets, "--configfile", write(config, tmp_path / "config.yaml"), timeout=None)
+    run = snakemake("-j1", *targets, "--configfile", write(config, tmp_path / "config.yaml"), cwd=module_workflow_dir,
+                    timeout=None)
     assert run.returncode == 0, run.stderr[-3000:]
     restored = release.restore_case(folder, label, tmp_path / "restored")
     for stem in ("preshear", *case["protocols"]):
@@ -271,9 +270,9 @@ def test_released_case_dem_reruns_identically(released, tmp_path):
                                       check_exact=True)
 
 
-def test_a_missing_release_stops_the_workflow_naming_its_manifest(tmp_path):
+def test_a_missing_release_stops_the_workflow_naming_its_manifest(workflow_dir, tmp_path):
     config = write(campaign_config(tmp_path / "results", release=str(tmp_path / "nothere")), tmp_path / "config.yaml")
-    run = snakemake("-n", "--configfile", config, timeout=300)
+    run = snakemake("-n", "--configfile", config, cwd=workflow_dir, timeout=300)
     assert run.returncode == 2
     assert f"config key 'release': {tmp_path / 'nothere' / 'manifest.yaml'}: not readable" in run.stderr
 
@@ -298,7 +297,6 @@ def test_the_released_validation_cells_decide_the_narrow_cell_without_yade(workf
     """config/bulk_validation_paper.yaml with its release: the four cells are restored, not run (no DEM rule
     in the plan), and the study's own tolerance rule finds the narrow cell H = 37d, W = 18.5d the W = 4H,
     H = 24d wall cell's material at the paper's physics (docs/findings.md, "The narrow cell at the paper's physics")."""
-    from tests.helpers import counts, dry_run, snakemake
     args = ["bulk_vs_walls", "--configfile", "config/bulk.yaml", "config/bulk_validation_paper.yaml",
             "--config", f"results_dir={tmp_path / 'results'}", f"release={PAPER_VALIDATION}"]
     plan = dry_run(*args, cwd=workflow_dir)
