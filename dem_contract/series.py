@@ -88,9 +88,9 @@ def read_series(path, columns=CONTRACT_COLUMNS, min_samples: int = 2, what: str 
     path = Path(path)
     if not path.is_file():
         raise DEMInputError(f"{path}: file not found" + (f" (expected {what})" if what else ""))
-    _check_rows_complete(path)
+    text = _read_complete_text(path)
     try:
-        raw = pd.read_csv(path)
+        raw = pd.read_csv(io.StringIO(text))
     except Exception as exc:  # pandas raises several types for unreadable files
         raise DEMInputError(f"{path}: not a readable CSV ({exc})") from None
     raw.columns = [str(c).strip() for c in raw.columns]
@@ -117,14 +117,16 @@ def read_series(path, columns=CONTRACT_COLUMNS, min_samples: int = 2, what: str 
     return data
 
 
-def _check_rows_complete(path: Path) -> None:
-    """``check_complete_rows`` on a series file, gzipped or not (an empty file is left to pandas to report)."""
+def _read_complete_text(path: Path) -> str:
+    """A series file's text, gzipped or not, after ``check_complete_rows`` (an empty file is left to pandas
+    to report); ``read_series`` parses this text, so the file is read and decompressed once."""
     try:
         text = gzip.open(path, "rt").read() if path.suffix == ".gz" else path.read_text()
     except (OSError, UnicodeDecodeError, EOFError) as exc:
         raise DEMInputError(f"{path}: not a readable CSV ({exc})") from None
     if text.strip():
         check_complete_rows(path, text)
+    return text
 
 
 def check_complete_rows(path, text: str | None = None) -> int:
