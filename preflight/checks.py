@@ -24,13 +24,11 @@ import math
 import re
 from pathlib import Path
 
-import yaml
-
 from campaign.calibration_sets import calibration_sets, same_value
 from campaign.cases import cases, rates
 from campaign.configfile import ConfigProblem, configfile_problems, load_configfile  # noqa: F401 (re-exported)
 from campaign.scene_spec import inertial_number_range, protocol_strain, scene_default, scene_module
-from campaign.schema_defaults import SCHEMA
+from campaign.schema_defaults import SCHEMA, schema as read_schema
 from campaign.scenes import scene_from_config
 from dem_contract.labels import case_label, format_number
 
@@ -82,7 +80,7 @@ def schema_problems(config: dict, schema_path=SCHEMA) -> list[str]:
     """The schema's findings, one line each, naming the key (Snakemake's validate then fills defaults)."""
     import jsonschema
 
-    schema = yaml.safe_load(Path(schema_path).read_text())
+    schema = read_schema(schema_path)
     validator = jsonschema.validators.validator_for(schema)(schema)
     out = []
     for error in sorted(validator.iter_errors(config), key=lambda e: list(map(str, e.absolute_path))):
