@@ -10,6 +10,7 @@ share them. A module from ``yade_scripts/`` is loaded under a private name (``ya
 without putting that folder on ``sys.path`` for the whole run.
 """
 import contextlib
+import importlib
 import importlib.util
 import io
 import json
@@ -18,6 +19,7 @@ import signal
 import subprocess
 import sys
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -312,18 +314,39 @@ def counts(stdout):
     return out
 
 
-def preflight_check(*configfiles):
-    """``python -m preflight check configfiles...``, in-process (the Snakefile's gate runs the same
-    ``preflight.check`` before any job, in milliseconds rather than a dry run's seconds): a
-    CompletedProcess with its exit code and stderr. tests/test_campaign_preflight.py runs
-    representative cases through the real ``snakemake -n`` as well."""
-    from preflight.__main__ import main
+def run_main(module: str, argv, package: str | None = None) -> subprocess.CompletedProcess:
+    """``python -m <package> argv...`` in this process: ``module``'s ``main(argv)`` (the function the
+    package's ``__main__`` hands its arguments to), with stdout, stderr and every warning captured as a
+    process of its own would print them, and argparse's exit turned into the exit code. A process of
+    its own would spend 1 to 1.6 s of CPU importing what this one has imported already.
 
-    err = io.StringIO()
-    with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()) as out:
-        code = main(["check", *map(str, configfiles)])
-    return subprocess.CompletedProcess(["python", "-m", "preflight", "check", *map(str, configfiles)], code,
-                                       out.getvalue(), err.getvalue())
+    ``package`` (default: ``module``'s first part) names ``sys.argv[0]`` as under ``python -m``, for
+    argparse's program name. Returns a CompletedProcess."""
+    package = package or module.split(".")[0]
+    main = importlib.import_module(module).main
+    out, err = io.StringIO(), io.StringIO()
+    saved = sys.argv
+    sys.argv = [str(ROOT / package / "__main__.py"), *map(str, argv)]
+    try:
+        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err), warnings.catch_warnings():
+            warnings.simplefilter("always")                  # printed, as a fresh process prints them
+            warnings.showwarning = lambda message, category, filename, lineno, file=None, line=None: err.write(
+                warnings.formatwarning(message, category, filename, lineno, line))
+            try:
+                code = main(list(map(str, argv)))
+            except SystemExit as exc:                       # argparse's own errors
+                code = exc.code
+    finally:
+        sys.argv = saved
+    return subprocess.CompletedProcess(["python", "-m", package, *map(str, argv)], code or 0, out.getvalue(),
+                                       err.getvalue())
+
+
+def preflight_check(*configfiles):
+    """``python -m preflight check configfiles...``, in-process (``run_main``; the Snakefile's gate runs the
+    same ``preflight.check`` before any job, in milliseconds rather than a dry run's seconds).
+    tests/test_campaign_preflight.py runs representative cases through the real ``snakemake -n`` as well."""
+    return run_main("preflight.__main__", ["check", *configfiles])
 
 
 def workflow_rules(workdir, configfile):

@@ -9,17 +9,14 @@ interpreter, the package's imports and ``__main__``); the others call the functi
 code reads the input and writes the message), with every warning written to the captured
 stderr as a process would print it.
 """
-import contextlib
-import importlib
-import io
 import subprocess
 import sys
-import warnings
 from pathlib import Path
 
 import pytest
 
 from model import default_params, save_params
+from tests.helpers import run_main
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -124,27 +121,6 @@ MAINS = {"model": "model.cli", "calibrate": "calibrate.__main__", "compare": "co
 IN_A_PROCESS = {next(c[0] for c in CASES if c[1][1] == package) for package in MAINS}
 
 
-def in_process(args):
-    """``python *args`` (``-m package ...``) run by the package's main in this process: a CompletedProcess."""
-    package, argv = args[1], args[2:]
-    main = importlib.import_module(MAINS[package]).main
-    out, err = io.StringIO(), io.StringIO()
-    saved = sys.argv
-    sys.argv = [str(ROOT / package / "__main__.py"), *argv]   # argparse's prog, as under python -m
-    try:
-        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err), warnings.catch_warnings():
-            warnings.simplefilter("always")                  # printed, as a fresh process prints them
-            warnings.showwarning = lambda message, category, filename, lineno, file=None, line=None: err.write(
-                warnings.formatwarning(message, category, filename, lineno, line))
-            try:
-                code = main(argv)
-            except SystemExit as exc:                       # argparse's own errors
-                code = exc.code
-    finally:
-        sys.argv = saved
-    return subprocess.CompletedProcess(["python", *args], code or 0, out.getvalue(), err.getvalue())
-
-
 @pytest.mark.parametrize("argv, needles, own_process", [(*c[1:], c[0] in IN_A_PROCESS) for c in CASES],
                          ids=[c[0] for c in CASES])
 def test_bad_input_exits_2_with_one_line_naming_the_file(inputs, argv, needles, own_process):
@@ -152,7 +128,7 @@ def test_bad_input_exits_2_with_one_line_naming_the_file(inputs, argv, needles, 
     if own_process:
         proc = subprocess.run([sys.executable, *args], cwd=ROOT, capture_output=True, text=True, timeout=120)
     else:
-        proc = in_process(args)
+        proc = run_main(MAINS[args[1]], args[2:], package=args[1])
     assert proc.returncode == 2, proc.stderr
     assert "Traceback" not in proc.stderr
     lines = proc.stderr.strip().splitlines()

@@ -6,8 +6,6 @@ put into the minimal format a user brings: one CSV per run holding the whole
 history, with only the required columns, a start from rest (the wall speed
 steps from 0 at t = 0), and a metadata YAML.
 """
-import contextlib
-import io
 import json
 import subprocess
 import sys
@@ -22,6 +20,7 @@ from calibrate import synthetic
 from dem_contract import DEMInputError, read_series
 from dem_contract.importer import MINIMAL_COLUMNS, import_cases
 from model import default_params
+from tests.helpers import run_main
 
 ROOT = Path(__file__).resolve().parents[1]
 PRESHEAR = 2.0
@@ -31,19 +30,9 @@ def run_cli(*args, cwd=None):
     return subprocess.run([sys.executable, "-m", *args], cwd=cwd or ROOT, capture_output=True, text=True)
 
 
-def run_main(package, *args):
-    """``python -m package *args`` in-process: the function its ``__main__`` hands the arguments to
-    (calibrate, compare, claims), with its exit code and output; a process of its own would spend
-    1 to 1.6 s of CPU importing what this one has imported already."""
-    import importlib
-    main = importlib.import_module({"calibrate": "calibrate.__main__"}.get(package, f"{package}.cli")).main
-    out, err = io.StringIO(), io.StringIO()
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-        try:
-            code = main(list(args))
-        except SystemExit as exc:   # argparse's errors
-            code = exc.code
-    return subprocess.CompletedProcess(["python", "-m", package, *args], code or 0, out.getvalue(), err.getvalue())
+def run_package(package, *args):
+    """``python -m package *args`` in-process (``helpers.run_main``): calibrate, compare and claims."""
+    return run_main({"calibrate": "calibrate.__main__"}.get(package, f"{package}.cli"), args, package=package)
 
 
 def minimal_runs(made: Path, out: Path, seed: int, protocols, mirror=False, extra=()):
@@ -123,21 +112,21 @@ CALIBRATE_OPTIONS = ["--bootstrap", "4", "--bootstrap-evals", "20", "--route2-ev
 
 def pipeline(meta: Path, root: Path, sets: dict, protocols):
     """The packages' command lines on imported data: import (its own process), calibrate and compare per set, claims
-    (in-process, ``run_main``); returns the DEM dirs."""
+    (in-process, ``run_package``); returns the DEM dirs."""
     done = run_cli("dem_contract", "import", "--meta", str(meta), "--out", str(root / "dem"))
     assert done.returncode == 0, done.stderr
     dirs = sorted(str(d) for d in (root / "dem").iterdir())
     labels = [Path(d).name for d in dirs]
     for name, trained in sets.items():
-        done = run_main("calibrate", "--dem", *dirs, "--protocols", *trained, "--out", str(root / "cal" / name),
+        done = run_package("calibrate", "--dem", *dirs, "--protocols", *trained, "--out", str(root / "cal" / name),
                        *CALIBRATE_OPTIONS)
         assert done.returncode == 0, done.stdout[-2000:] + done.stderr
-        done = run_main("compare", "predict", "--dem", *dirs, "--params", str(root / "cal" / name / "params.yaml"),
+        done = run_package("compare", "predict", "--dem", *dirs, "--params", str(root / "cal" / name / "params.yaml"),
                        "--set", name, "--protocols", *protocols, "--train-cases", *labels,
                        "--train-protocols", *trained, "--out", str(root / "compare" / name),
                        "--figures")   # none drawn (as calibrate's --no-figures): no test reads them, 1.2 s each
         assert done.returncode == 0, done.stdout[-2000:] + done.stderr
-    done = run_main("claims", "--compare", str(root / "compare"), "--dem", *dirs, "--protocols", *protocols,
+    done = run_package("claims", "--compare", str(root / "compare"), "--dem", *dirs, "--protocols", *protocols,
                    "--calibration", str(root / "cal" / "all" / "params.yaml"), "--sets", *sets,
                    "--resamples", "200", "--out", str(root / "claims"))
     assert done.returncode == 0, done.stdout[-2000:] + done.stderr
