@@ -36,6 +36,17 @@ def test_spline_law_holds_a_linear_law_exactly_inside_and_outside_its_breaks():
     assert sp(0.3) == pytest.approx((0.3, 5.5))
 
 
+def test_spline_law_on_a_float_equals_its_design_matrix_inside_outside_and_at_the_breaks():
+    rng = np.random.default_rng(3)
+    sp = AlphaSpline((-0.3, -0.1, 0.0, 0.05, 0.1), rng.normal(size=7), 10.0 * rng.normal(size=7))
+    X = np.concatenate([rng.uniform(-0.7, 0.5, 500), sp.breaks, [np.nextafter(0.1, 1.0), np.nan]])
+    want = spline_basis(X, sp.breaks) @ np.column_stack([sp.c1, sp.c2])   # the array path
+    got = np.array([sp(float(x)) for x in X])                               # the plain-float path
+    assert all(type(v) is float for v in sp(0.01))
+    np.testing.assert_allclose(got, want, rtol=1e-13, atol=1e-13)
+    assert np.isnan(got[-1]).all()
+
+
 def test_spline_law_rejects_coefficients_that_do_not_match_its_breaks():
     with pytest.raises(ValueError, match="need 5 coefficients"):
         AlphaSpline((0.0, 0.1, 0.2), [1.0] * 4, [1.0] * 5)
