@@ -267,20 +267,15 @@ def engine_seconds(O, pyrunners):
 
 
 def run_and_wait(O, n, how, rate={}):
-    """O.run(n, True) (how = "yade": YADE's wait, which sleeps 40 ms between looks), or
-    O.run(n), a sleep through 90 % of the time the last chunk's rate predicts (less than all
-    of it: a rate measured after an oversleep would predict ever longer chunks), then a look at
-    O.running every millisecond (how = "fine")."""
+    """O.run(n, True) (how = "yade": YADE's wait, which sleeps 40 ms between looks), or the
+    stage's wait, ``runwait.run_and_wait`` (how = "fine": a sleep through 90 % of the time the
+    last chunk's rate predicts, then a look at O.running every millisecond)."""
     if how == "yade":
         O.run(n, True)
         return
-    i0, t0 = O.iter, time.perf_counter()
-    O.run(n)
-    if rate.get("steps_per_s"):
-        time.sleep(0.9 * n / rate["steps_per_s"])
-    while O.running:
-        time.sleep(0.001)
-    rate["steps_per_s"] = (O.iter - i0) / max(1e-6, time.perf_counter() - t0)
+    import runwait   # the stage's own wait (yade_scripts/runwait.py)
+
+    rate["steps_per_s"] = runwait.run_and_wait(O, n, rate.get("steps_per_s"))
 
 
 def untimed_run(O, parts, how="yade"):

@@ -16,7 +16,7 @@ asks for a checkpoint. Its state lives in O.tags so that a checkpoint carries it
 and a killed stage resumes exactly at its last checkpoint.
 
 The run loop advances the simulation in chunks of about CHUNK_S of wall time
-(`O.run(n, True)` stops after a whole step), cut at segment boundaries and at the
+(`O.run(n)` stops after a whole step; runwait waits for it), cut at segment boundaries and at the
 reload points (every checkpoint.RELOAD_EVERY steps), where the state is reloaded
 and a checkpoint, if asked for, written. Python runs signal handlers only between
 chunks (not while the main thread waits in YADE's C++), so SIGTERM and SIGINT (see
@@ -31,6 +31,7 @@ import time
 from yade.wrapper import Omega
 
 import measure
+import runwait
 import scene as scenemod
 from checkpoint import Checkpoints
 from outputs import Outputs
@@ -101,6 +102,7 @@ class Stage(Packing, Shearing, Sampling, Checkpoints, Outputs):
         # no row at the start itself: contact forces are not saved with a state, so the
         # first row comes one sampling interval in (the sidecar has the start's t and strain)
         chunk = 10  # steps; then sized from the measured rate to about CHUNK_S
+        rate = None  # steps per wall second of the last chunk (runwait.run_and_wait)
         while True:
             remaining = st["n_steps"] - (O.iter - st["iter0"])
             if remaining <= 0 or self.done:
@@ -115,7 +117,7 @@ class Stage(Packing, Shearing, Sampling, Checkpoints, Outputs):
             n = min(n, reload_at - (O.iter - st["iter0"]))
             i0, w0 = O.iter, time.time()
             if n > 0:
-                O.run(n, True)
+                rate = runwait.run_and_wait(O, n, rate)
             if self.error is not None:
                 raise self.error
             if boundary is not None and O.iter - st["iter0"] >= boundary:
