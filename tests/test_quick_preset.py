@@ -10,6 +10,7 @@ import re
 import shlex
 
 import pytest
+import yaml
 
 from tests.helpers import ROOT, counts, dry_run, workflow_rules
 
@@ -45,6 +46,15 @@ def test_the_quick_preset_plans_the_study_and_no_benchmark_of_the_code(code_benc
     jobs = counts(result.stdout)
     assert not code_benchmarks & set(jobs), sorted(code_benchmarks & set(jobs))
     assert STUDY <= set(jobs), sorted(STUDY - set(jobs))
+
+
+def test_snakemake_finds_the_workflow_profile_that_runs_run_blocks_in_its_own_threads(shared_dry_run):
+    """A ``run:`` job (scene files, HTML tables) in a new Snakemake process parses the workflow and
+    runs the pre-flight again: 3-4 s each instead of about 0.1 s (profiles/default/config.yaml)."""
+    result = shared_dry_run("--configfile", "config/quick.yaml")
+    assert "Using workflow specific profile profiles/default" in result.stdout + result.stderr
+    profile = yaml.safe_load((ROOT / "profiles" / "default" / "config.yaml").read_text())
+    assert profile["force-use-threads"] is True
 
 
 def test_make_bench_plans_every_benchmark_of_the_code(code_benchmarks, workflow_dir):
