@@ -5,6 +5,7 @@ its DEM data (c1, c2, c3 below): Eq. 5 with these alphas has no stable steady st
 simple shear, and forward shear from isotropy passes |A| = 1/sqrt 2 within a strain.
 """
 import math
+from functools import partial
 
 import numpy as np
 import pandas as pd
@@ -12,7 +13,7 @@ import pytest
 
 from calibrate import pipeline, profiles, shear_stability
 from model import default_params, params_from_dict, simulate, steady_shear
-from model.laws import spline_of_linear
+from model.laws import alpha_model2, spline_of_linear
 
 UNSTABLE_MODEL2 = {"c1": -1.006897, "c2": -17.295029, "c3": -90.281996}
 
@@ -42,6 +43,49 @@ def test_a_model2_set_without_a_stable_steady_state_is_refused_with_its_divergen
     tab = simulate(params_from_dict(doc_with(UNSTABLE_MODEL2)), steady_shear(0.98 * v["diverges_at"]),
                    model="model2", A0=(0.0, 0.0))
     assert 0.3 < tab["A_norm"].max() < 1 / np.sqrt(2)       # still physical just before, growing fast
+
+
+def solve_ivp_forward_divergence(alphas, X_c=math.inf, strain=shear_stability.FORWARD_STRAIN):
+    """The forward test as scipy's solve_ivp runs it (LSODA, two terminal events): the reference."""
+    from scipy.integrate import solve_ivp
+
+    def rate(_, y):
+        al1, al2 = alphas(float(np.sqrt(2.0) * y[1]))
+        return [al2 * y[0] / np.sqrt(2.0) + y[1], 0.5 * al1 + al2 * y[1] / np.sqrt(2.0) - y[0]]
+
+    def norm(_, y):
+        return shear_stability.AB2_MAX - (y[0] ** 2 + y[1] ** 2)
+
+    def pole(_, y):
+        return (X_c - np.sqrt(2.0) * y[1]) if math.isfinite(X_c) else 1.0
+
+    norm.terminal = pole.terminal = True
+    with np.errstate(all="ignore"):
+        sol = solve_ivp(rate, (0.0, strain), [0.0, 0.0], method="LSODA", rtol=1e-6, atol=1e-9, events=(norm, pole))
+    if sol.t_events[0].size:
+        return float(sol.t_events[0][0]), "|A| > 1/sqrt 2"
+    if sol.t_events[1].size:
+        return float(sol.t_events[1][0]), "X reaches the pole X_c"
+    assert sol.status == 0 and np.all(np.isfinite(sol.y))
+    return None
+
+
+def test_forward_shear_from_isotropy_ends_where_solve_ivp_with_its_events_ends_to_the_bit():
+    p = default_params()
+    laws = {
+        "model1 default": shear_stability.law_of(p, "model1"),
+        "model2 default": shear_stability.law_of(p, "model2"),
+        "model2 unstable": shear_stability.law_of(doc_with(UNSTABLE_MODEL2), "model2"),
+        "alpha1 = 1, alpha2 = -1 (steady X = 1/3), pole at 0.1": (partial(alpha_model2, c1=1.0, c2=-1.0, c3=0.0), 0.1),
+        "spline": (spline_of_linear((-0.3, -0.1, 0.0, 0.1), -2.4, 1.0, -36.0, -120.0), math.inf),
+        "spline, alpha2 > 0": (spline_of_linear((-0.3, 0.0, 0.3), 0.5, 0.0, 1.0, 5.0), math.inf),
+    }
+    outcomes = {}
+    for name, (alphas, X_c) in laws.items():
+        got = shear_stability.forward_divergence(alphas, X_c)
+        assert got == solve_ivp_forward_divergence(alphas, X_c), name
+        outcomes[name] = got[1] if got else "stays physical"
+    assert set(outcomes.values()) == {"stays physical", "|A| > 1/sqrt 2", "X reaches the pole X_c"}, outcomes
 
 
 def test_a_free_form_law_is_checked_like_the_models():
