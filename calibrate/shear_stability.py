@@ -94,7 +94,7 @@ def forward_divergence(alphas, X_c=math.inf, strain: float = FORWARD_STRAIN):
                     t, k = min((brentq(lambda t, f=events[k][0]: f(sol(t)), solver.t_old, solver.t,
                                        xtol=4 * EPS, rtol=4 * EPS), k) for k in crossed)
                     return float(t), events[k][1]
-                g, finite = g_new, finite and bool(np.all(np.isfinite(solver.y)))
+                g, finite = g_new, finite and math.isfinite(solver.y[0]) and math.isfinite(solver.y[1])
         except (ValueError, ArithmeticError) as exc:
             return 0.0, f"the integration fails ({exc})"
     if not finite:
