@@ -4,8 +4,10 @@ The lock (campaign/results_lock.py) is taken in the Snakefile's ``onstart``.
 The Snakemake tests start a first run from one working directory, freeze it
 (SIGSTOP) once it holds the lock, and start a second one from another (``-d``:
 each has its own ``.snakemake``, so Snakemake's own lock does not see the other,
-as with two clones) on the same results folder. The target is a case's scene file (the
-``scene`` rule runs no YADE).
+as with two clones) on the same results folder. The first one's target is a case's pack
+(a YADE stage of a few seconds, so that the lock is held long enough to be seen and
+frozen: a scene file alone is written in milliseconds, profiles/default), the second's
+the other case's scene file (no YADE).
 """
 import copy
 import json
@@ -79,13 +81,21 @@ def campaign(tmp_path):
     config["results_dir"] = str(tmp_path / "results")
     path = tmp_path / "config.yaml"
     path.write_text(yaml.safe_dump(config))
-    scenes = [tmp_path / "results" / "dem" / f"p100000_I0.01_s{seed}" / "scene.json" for seed in (1, 2)]
-    return path, tmp_path / "results", scenes
+    cases = [tmp_path / "results" / "dem" / f"p100000_I0.01_s{seed}" for seed in (1, 2)]
+    return path, tmp_path / "results", (cases[0] / "pack.csv", cases[1] / "scene.json")
 
 
 def snakemake(config, target, *args, workdir=None):
     where = ["-s", str(ROOT / "Snakefile"), "-d", str(workdir)] if workdir else []
     return [*SNAKEMAKE, "-j1", str(target), *where, "--configfile", str(config), *args]
+
+
+def first_clone(tmp_path):
+    """The first run's working directory: a clone's stage scripts, which its DEM rule runs by relative path."""
+    folder = tmp_path / "first_clone"
+    folder.mkdir()
+    (folder / "yade_scripts").symlink_to(ROOT / "yade_scripts")
+    return folder
 
 
 def start_and_freeze(cmd, lock_path, workdir):
@@ -103,11 +113,10 @@ def start_and_freeze(cmd, lock_path, workdir):
 
 @pytest.mark.slow
 def test_second_snakemake_from_another_directory_is_refused_before_any_job(campaign, tmp_path):
-    config, results, (scene1, scene2) = campaign
+    config, results, (pack1, scene2) = campaign
     lock_path = results / LOCK_NAME
-    first_dir = tmp_path / "first_clone"
-    first_dir.mkdir()
-    first = start_and_freeze(snakemake(config, scene1, workdir=first_dir), lock_path, first_dir)
+    first_dir = first_clone(tmp_path)
+    first = start_and_freeze(snakemake(config, pack1, workdir=first_dir), lock_path, first_dir)
     try:
         owner = json.loads(lock_path.read_text())
         assert owner["pid"] == first.pid
@@ -127,7 +136,7 @@ def test_second_snakemake_from_another_directory_is_refused_before_any_job(campa
     finally:
         os.killpg(first.pid, signal.SIGCONT)
     assert first.wait(timeout=300) == 0, first.stdout.read()[-3000:]
-    assert scene1.exists() and not lock_path.exists()  # released on exit
+    assert pack1.exists() and not lock_path.exists()  # released on exit
     # the refused directory is not left locked: the same run now goes through
     again = subprocess.run(snakemake(config, scene2, workdir=other), cwd=other, capture_output=True, text=True,
                            timeout=300)
@@ -137,11 +146,10 @@ def test_second_snakemake_from_another_directory_is_refused_before_any_job(campa
 
 @pytest.mark.slow
 def test_lock_left_by_a_killed_snakemake_is_taken_over(campaign, tmp_path):
-    config, results, (scene1, scene2) = campaign
+    config, results, (pack1, scene2) = campaign
     lock_path = results / LOCK_NAME
-    first_dir = tmp_path / "first_clone"
-    first_dir.mkdir()
-    first = start_and_freeze(snakemake(config, scene1, workdir=first_dir), lock_path, first_dir)
+    first_dir = first_clone(tmp_path)
+    first = start_and_freeze(snakemake(config, pack1, workdir=first_dir), lock_path, first_dir)
     os.killpg(first.pid, signal.SIGKILL)
     first.wait(timeout=60)
     assert lock_path.exists()  # SIGKILL: no onerror, the file stays (its flock is gone)
