@@ -61,9 +61,10 @@ def forward_divergence(alphas, X_c=math.inf, strain: float = FORWARD_STRAIN):
 
     The loop is ``solve_ivp``'s with its two terminal events, written out for plain floats:
     the same LSODA steps, an event where its function changes sign over a step, located by
-    ``brentq`` on the step's dense output to 4 eps, the earliest of the two. Through
-    ``solve_ivp`` its generic event bookkeeping (numpy on two-element arrays, every step)
-    took a third of a whole calibration set's time; the results are the same to the bit
+    ``brentq`` on the step's dense output to 4 eps, the earliest of the two. This test is run
+    for every trial set of every fit, a third of a calibration set's time through
+    ``solve_ivp``, whose generic event bookkeeping (numpy on two-element arrays, every step)
+    was a third of the test; the results are the same to the bit
     (tests/test_calibrate_shear_stability.py).
 
     Returns
@@ -82,7 +83,7 @@ def forward_divergence(alphas, X_c=math.inf, strain: float = FORWARD_STRAIN):
     with np.errstate(all="ignore"):
         try:
             solver = LSODA(rate, 0.0, [0.0, 0.0], strain, rtol=1e-6, atol=1e-9)
-            g, finite, message = [f(solver.y) for f, _ in events], True, ""
+            g, finite = [f(solver.y) for f, _ in events], True
             while solver.status == "running":
                 message = solver.step()
                 if solver.status == "failed":
@@ -98,7 +99,7 @@ def forward_divergence(alphas, X_c=math.inf, strain: float = FORWARD_STRAIN):
         except (ValueError, ArithmeticError) as exc:
             return 0.0, f"the integration fails ({exc})"
     if not finite:
-        return float(solver.t), f"the integration fails ({message or 'a state is not finite'})"
+        return float(solver.t), "the integration fails (a state is not finite)"
     return None
 
 

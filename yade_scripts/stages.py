@@ -18,9 +18,9 @@ and a killed stage resumes exactly at its last checkpoint.
 The run loop advances the simulation in chunks of about CHUNK_S of wall time
 (`O.run(n)` stops after a whole step; runwait waits for it), cut at segment boundaries and at the
 reload points (every checkpoint.RELOAD_EVERY steps), where the state is reloaded
-and a checkpoint, if asked for, written. Python runs signal handlers only between
-chunks (not while the main thread waits in YADE's C++), so SIGTERM and SIGINT (see
-`install_signal_handlers`) are acted on at the end of the current chunk: the stage
+and a checkpoint, if asked for, written. SIGTERM and SIGINT (see
+`install_signal_handlers`) only record themselves, whenever Python runs the handler
+(during runwait's sleeps too), and are acted on at the end of the current chunk: the stage
 goes back to the last reload point, checkpoints it and raises Interrupted (exit
 code 4). Checkpoints are never written inside a step.
 """
