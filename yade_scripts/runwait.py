@@ -16,17 +16,18 @@ def run_and_wait(O, n, steps_per_s=None):
 
     Sleeps through ``SLEEP_SHARE`` of the time ``steps_per_s`` (the last run's rate)
     predicts, then looks at ``O.running`` every ``LOOK_S``; without a rate it looks from
-    the start. A run that had already ended when the sleep did was overslept: its rate is
-    only a lower bound (a prediction from it would sleep as long again, and the estimate
-    would climb back by 1/SLEEP_SHARE per run), so it returns None and the next run is
-    watched from its start. ``O.wait()`` at the end returns at once and, as
+    the start. A run that had already ended when a sleep longer than one look did was
+    overslept: its rate is only a lower bound (a prediction from it would sleep as long
+    again, and the estimate would climb back by 1/SLEEP_SHARE per run), so it returns None
+    and the next run is watched from its start. After a sleep shorter than a look the rate
+    is as good as a watched run's. ``O.wait()`` at the end returns at once and, as
     ``O.run(n, True)`` does, raises what the simulation thread threw.
     """
     i0, t0 = O.iter, time.perf_counter()
     O.run(n)
-    if steps_per_s:
-        time.sleep(SLEEP_SHARE * n / steps_per_s)
-    overslept = steps_per_s is not None and not O.running
+    sleep_s = SLEEP_SHARE * n / steps_per_s if steps_per_s else 0.0
+    time.sleep(sleep_s)
+    overslept = sleep_s > LOOK_S and not O.running
     while O.running:
         time.sleep(LOOK_S)
     O.wait()
