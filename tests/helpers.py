@@ -46,7 +46,7 @@ def command(script, *args):
     """The command line of a script: the stage runner and the tools/ scripts as the workflow runs
     them (python3, YADE imported as a library, no remote servers), any other script (an
     inspection written by a test) under the yade launcher."""
-    if Path(script).name == "run_stage.py" or Path(script).parent.name == "tools":
+    if Path(script).name in ("run_stage.py", "contact_census.py") or Path(script).parent.name == "tools":
         return ["python3", str(script), *map(str, args)]
     return ["yade", "-n", "-x", str(script), *map(str, args)]
 

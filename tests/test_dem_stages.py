@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from dem_contract import fabric_angle_deg, fabric_norm
-from tests.helpers import (RUN, assert_pack_restored_the_grains_own_friction_and_damping,
+from tests.helpers import (RUN, YS, assert_pack_restored_the_grains_own_friction_and_damping,
                            assert_resumed_without_gap_or_duplicate, kill_preshear_after_first_checkpoint,
                            make_scene, read, run_all_stages, yade)
 
@@ -241,3 +241,32 @@ def test_killed_stage_resumes_without_gap_or_duplicate_to_the_same_bit(case, tmp
     strain = s["strain"]
     assert strain[-1] == pytest.approx(2.5, rel=0.05)
     assert (cdir / "preshear.csv").read_bytes() == (ref_dir / "preshear.csv").read_bytes()
+
+
+def census_of(case, tmp_path, stage="preshear"):
+    out = tmp_path / "census.json"
+    r = yade(YS / "contact_census.py", case["scene"], case["dir"] / f"{stage}.final.yade.gz", "--out", out)
+    assert r.returncode == 0, r.stderr[-2000:]
+    return json.loads(out.read_text())
+
+
+def test_contact_census_reads_the_series_fabric_as_its_contract_reading(case, tmp_path):
+    c = census_of(case, tmp_path)
+    contract, series = c["fabric"]["contract"], c["fabric"]["series"]
+    assert contract["A_xx"] == pytest.approx(series["A_xx"], abs=1e-12)
+    assert contract["A_xy"] == pytest.approx(series["A_xy"], abs=1e-12)
+    # steady shear along +x: the contacts gather along the compressive diagonal, A_xy < 0, X < 0
+    assert c["shear_sign"] == 1.0 and contract["X"] < 0
+    f = c["fabric"]
+    # the readings are nested sets: force-carrying within the band, rattlers out of those, the cell holds all
+    assert f["no_rattlers"]["n"] <= f["force"]["n"] <= f["contract"]["n"] < f["whole_cell"]["n"]
+    assert 0 < c["rattlers"] < c["N"] / 2
+
+
+def test_contact_census_overlap_is_the_force_over_the_stiffness_in_units_of_d(case, tmp_path):
+    # linear contacts kn = kappa p d: a contact carrying the typical force p d overlaps by d / kappa
+    c = census_of(case, tmp_path)
+    ov, kappa = c["overlap_d"], c["kappa"]
+    assert ov["n"] > 100
+    assert 0.2 < ov["mean"] * kappa < 5
+    assert ov["median"] <= ov["p90"] <= ov["max"] < 0.05   # below the overlap guard
