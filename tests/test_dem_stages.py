@@ -214,7 +214,8 @@ def _case_from_pack(case, tmp_path, **changes):
 
 @pytest.mark.parametrize("guard, match", [
     (dict(guards=dict(max_overlap_d=1e-4)), "overlap"),
-    (dict(guards=dict(pressure_tolerance=1e-3, pressure_window_strain=0.02)), "wall pressure"),
+    # the bare tolerance, without the cell's fluctuation scale (pressure_noise_z 0)
+    (dict(guards=dict(pressure_tolerance=1e-3, pressure_window_strain=0.02, pressure_noise_z=0)), "wall pressure"),
 ])
 def test_guards_stop_the_run(case, tmp_path, guard, match):
     scene, cdir = _case_from_pack(case, tmp_path, **guard)
@@ -222,6 +223,14 @@ def test_guards_stop_the_run(case, tmp_path, guard, match):
     assert r.returncode == 3, r.stdout[-1000:] + r.stderr[-1000:]
     assert match in r.stderr
     assert not (cdir / "preshear.csv").exists()  # no half outputs
+
+
+def test_pressure_guard_lets_the_cells_own_fluctuation_pass(case, tmp_path):
+    """A tolerance far below the tiny cell's fluctuation (which stops the run above, with z = 0)
+    is raised to 2.5 sqrt(d/W) by default: a physical run is not refused for its size."""
+    scene, cdir = _case_from_pack(case, tmp_path, guards=dict(pressure_tolerance=1e-3, pressure_window_strain=0.02))
+    r = yade(RUN, scene, "preshear", cdir)
+    assert r.returncode == 0, r.stdout[-1000:] + r.stderr[-1000:]
 
 
 def test_killed_stage_resumes_without_gap_or_duplicate_to_the_same_bit(case, tmp_path):

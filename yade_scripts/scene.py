@@ -94,6 +94,7 @@ SPEC = {
         "max_overlap_d": (_num(0, 0.5, lo_open=True), 0.05),
         "pressure_tolerance": (_num(0, 10, lo_open=True), 0.2),
         "pressure_window_strain": (_num(0, 100, lo_open=True), 0.1),
+        "pressure_noise_z": (_num(0, 100), 2.5),
     },
 }
 # sections that may be left out entirely (all keys have defaults, or only some stages need them)
