@@ -1,4 +1,4 @@
-"""Command line: ``python -m dem_study analyse|estimate ...`` (see dem_study/README.md)."""
+"""Command line: ``python -m dem_study analyse|estimate|stiffness ...`` (see dem_study/README.md)."""
 from __future__ import annotations
 
 import argparse
@@ -11,7 +11,7 @@ import yaml
 from dem_contract import DEMInputError
 from dem_contract.tables import read_table
 
-from . import analysis, figures, grid
+from . import analysis, figures, grid, stiffness
 
 
 def _tolerance(items):
@@ -111,6 +111,28 @@ def estimate(args) -> int:
     return 0
 
 
+def stiffness_study(args) -> int:
+    for d in args.cases:
+        if not Path(d).is_dir():
+            raise analysis.StudyInputError(f"{d}: case folder (--cases) not found")
+    runs = stiffness.runs_table(args.cases, args.steady_window, args.early_strain)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    table = stiffness.stiffness_table(runs)
+    readings = stiffness.readings_table(runs)
+    runs.to_csv(out / "stiffness_runs.csv", index=False)
+    table.to_csv(out / "stiffness.csv", index=False)
+    readings.to_csv(out / "fabric_readings.csv", index=False)
+    stiffness.figure(table, out / "stiffness.png")
+    cols = [c for c in ("kappa", "seeds", "mu", "mu_se", "A_norm", "A_norm_se", "X", "X_se", "theta_A_deg", "phi",
+                        "Z", "A_min_early", "mu_early", "overlap_mean_d", "core_hours_per_seed") if c in table]
+    print(table[cols].to_string(index=False, float_format=lambda x: f"{x:.4g}"))
+    if len(readings):
+        print(readings.to_string(index=False, float_format=lambda x: f"{x:.4g}"))
+    print(f"wrote {out}/stiffness.csv, stiffness_runs.csv, fabric_readings.csv, stiffness.png")
+    return 0
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(prog="python -m dem_study", description=__doc__)
     sub = p.add_subparsers(dest="command", required=True)
@@ -131,6 +153,13 @@ def main(argv=None) -> int:
     e.add_argument("--subset", choices=["default", "full"])
     e.add_argument("--cores", type=int, default=2)
     e.set_defaults(func=estimate)
+    s = sub.add_parser("stiffness", help="steady state, early transient, overlap and cost against kappa")
+    s.add_argument("--cases", nargs="+", required=True,
+                   help="case folders (pre-shear and heaviside run, scene.json; any kappa, grouped by it)")
+    s.add_argument("--out", required=True, help="output folder")
+    s.add_argument("--steady-window", type=float, default=0.6, help="pre-shear strain averaged for steady values")
+    s.add_argument("--early-strain", type=float, default=0.1, help="strain after the reversal of the early transient")
+    s.set_defaults(func=stiffness_study)
     args = p.parse_args(argv)
     try:
         return args.func(args)

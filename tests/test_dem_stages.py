@@ -5,6 +5,7 @@ The cell: H = 8d, W = 4H (about 210 disks), kappa = 1e3, I = 1e-2. One module
 fixture runs pack -> preshear -> heaviside, sinusoidal once (about a minute).
 """
 import json
+import math
 import shutil
 
 import numpy as np
@@ -231,6 +232,31 @@ def test_pressure_guard_lets_the_cells_own_fluctuation_pass(case, tmp_path):
     scene, cdir = _case_from_pack(case, tmp_path, guards=dict(pressure_tolerance=1e-3, pressure_window_strain=0.02))
     r = yade(RUN, scene, "preshear", cdir)
     assert r.returncode == 0, r.stdout[-1000:] + r.stderr[-1000:]
+
+
+def test_stiffness_run_summary_of_a_real_case_reads_steady_x_early_transient_and_overlap(case, tmp_path):
+    from dem_contract import read_series, steady_values
+    from dem_study import stiffness
+
+    sc = json.loads(case["scene"].read_text())
+    cdir = tmp_path / "case"
+    shutil.copytree(case["dir"], cdir)
+    shutil.copy(case["scene"], cdir / "scene.json")
+    r = yade(YS / "contact_census.py", cdir / "scene.json", cdir / "preshear.final.yade.gz",
+             "--out", cdir / stiffness.CENSUS)
+    assert r.returncode == 0, r.stderr[-2000:]
+    row = stiffness.run_summary(cdir, steady_window=0.6, early_strain=0.1)
+    pre = read_series(cdir / "preshear.csv")
+    st = steady_values(pre, last_strain=0.6)
+    assert row["kappa"] == sc["material"]["kappa"] and row["seed"] == sc["seed"]
+    assert row["X"] == pytest.approx(math.sqrt(2) * st["A_xy"])     # sheared along +x
+    assert row["X"] < 0 and row["A_norm"] == pytest.approx(st["A_norm"])
+    assert 0 <= row["A_min_early"] < row["A_norm"]                # the fabric collapses after the reversal
+    assert 0 < row["strain_at_A_min"] < 0.1
+    census = json.loads((cdir / stiffness.CENSUS).read_text())
+    assert row["overlap_mean_d"] == census["overlap_d"]["mean"]
+    assert row["X_contract"] == census["fabric"]["contract"]["X"]
+    assert row["core_hours"] > row["core_hours_preshear"] > 0
 
 
 def test_killed_stage_resumes_without_gap_or_duplicate_to_the_same_bit(case, tmp_path):

@@ -1,0 +1,41 @@
+"""The stiffness axis (dem_study/stiffness.py): the per-kappa table and the fabric readings
+on a constructed runs table with known means (the per-run summary of a real tiny YADE case:
+tests/test_dem_stages.py)."""
+import math
+
+import pandas as pd
+import pytest
+
+from dem_study import stiffness
+
+
+def constructed_runs():
+    """Two kappas x 3 seeds: kappa 1e5 has |A| higher by 0.02 and X lower by 0.03, with known seed offsets."""
+    rows = []
+    for kappa, dA, dX in ((1e4, 0.0, 0.0), (1e5, 0.02, -0.03)):
+        for seed, e in zip((1, 2, 3), (-0.001, 0.0, 0.001)):
+            rows.append(dict(case=f"s{seed}", kappa=kappa, seed=seed, N=626, mu=0.27 + e, A_norm=0.085 + dA + e,
+                             X=-0.08 + dX + e, theta_A_deg=137.0 + 10 * e, phi=0.81, Z=2.9 + e, A_min_early=0.01,
+                             strain_at_A_min=0.05, mu_early=0.1, core_hours=0.1 * math.sqrt(kappa / 1e4),
+                             core_hours_preshear=0.08, X_contract=-0.07 + dX + e, X_no_rattlers=-0.072 + dX + 2 * e))
+    return pd.DataFrame(rows)
+
+
+def test_stiffness_table_gives_seed_means_and_distance_from_the_stiffest_in_standard_errors():
+    t = stiffness.stiffness_table(constructed_runs())
+    assert list(t["kappa"]) == [1e4, 1e5] and list(t["seeds"]) == [3, 3]
+    se = 0.001 / math.sqrt(3)                    # s.d. of (-1, 0, 1) e-3 over sqrt(3)
+    assert t["A_norm"].tolist() == pytest.approx([0.085, 0.105])
+    assert t["A_norm_se"].tolist() == pytest.approx([se, se])
+    assert t["z_A_norm"].iloc[0] == pytest.approx(-0.02 / (math.sqrt(2) * se))
+    assert t["z_X"].iloc[0] == pytest.approx(0.03 / (math.sqrt(2) * se))
+    assert t["z_A_norm"].iloc[1] == 0
+    assert t["core_hours_per_seed"].tolist() == pytest.approx([0.1, 0.1 * math.sqrt(10)])
+
+
+def test_fabric_readings_are_paired_by_seed_against_the_contracts():
+    r = stiffness.readings_table(constructed_runs()).set_index(["kappa", "reading"])
+    assert r.loc[(1e4, "contract"), "minus_contract"] == 0
+    # X_no_rattlers - X_contract = -0.002 + e per seed: mean -0.002, s.e. that of e
+    assert r.loc[(1e5, "no_rattlers"), "minus_contract"] == pytest.approx(-0.002)
+    assert r.loc[(1e5, "no_rattlers"), "minus_contract_se"] == pytest.approx(0.001 / math.sqrt(3))
