@@ -23,15 +23,13 @@ periodic cell (guess 0.8, sizes 0.5-1.5 d).
 from __future__ import annotations
 
 import copy
-import math
 import re
 
 import pandas as pd
 
+from campaign import cost
 from campaign.schema_defaults import block_defaults
 from campaign.scenes import scene_from_config
-
-from . import grid
 
 NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9-]*$")
 SEP = "_s"
@@ -74,11 +72,8 @@ def split_label(label: str) -> tuple[str, int]:
 
 def n_disks(kind: str, H_over_d: float, W_over_H: float, guess: float = 0.8,
             size_min: float = 0.5, size_max: float = 1.5) -> int:
-    """Disks of a cell (module docstring): the wall cell's count of ``grid.n_disks``, or the periodic one."""
-    if kind == "walls":
-        return grid.n_disks(H_over_d, W_over_H, guess, size_min, size_max)
-    mean_d2 = (size_max**3 - size_min**3) / (3 * (size_max - size_min))
-    return round(guess * W_over_H * H_over_d**2 / (math.pi * mean_d2 / 4))
+    """Disks of a cell (module docstring): ``campaign.cost.n_disks`` of the cell's kind."""
+    return cost.n_disks(H_over_d, W_over_H, guess, size_min, size_max, kind)
 
 
 def _disk_kwargs(config: dict) -> dict:
@@ -200,9 +195,9 @@ def case_scene(config: dict, label: str) -> dict:
 
 
 def estimate(config: dict) -> pd.DataFrame:
-    """Per case: disks, steps and estimated one-thread seconds (``grid``'s throughput and step counts).
+    """Per case: disks, steps and estimated one-thread seconds (``campaign.cost``, documented throughput).
 
-    seconds = N (PACK_TIME sqrt(4 kappa/pi)/dt_over_tc + steps_per_strain (preshear + reversal strain)) / throughput(N)
+    seconds = N (pack_steps + steps_per_strain (preshear + reversal strain)) / throughput(N)
 
     (the reversal strain: ``reversal_strain``, the train's for a cell with one).
     """
@@ -210,8 +205,6 @@ def estimate(config: dict) -> pd.DataFrame:
     table = cases(config)
     dt = config["timestep"]["dt_over_tc"]
     strain = s["preshear_strain"] + table["cell"].map(lambda c: reversal_strain(s["cells"][c], s))
-    shear = grid.steps_per_strain(s["kappa"], s["inertial_number"], dt) * strain
-    pack = grid.PACK_TIME * math.sqrt(4 * s["kappa"] / math.pi) / dt
-    table["steps"] = shear + pack
-    table["est_core_s"] = table["N"] * table["steps"] / table["N"].map(grid.throughput)
+    table["steps"] = cost.steps_per_strain(s["kappa"], s["inertial_number"], dt) * strain + cost.pack_steps(s["kappa"], dt)
+    table["est_core_s"] = [cost.core_seconds(n, steps) for n, steps in zip(table["N"], table["steps"])]
     return table

@@ -15,10 +15,11 @@ import yaml
 
 import pandas as pd
 
+from campaign.schedule import makespan
 from dem_contract import DEMInputError
 from dem_contract.tables import read_table
 
-from . import bulk, bulk_cells, bulk_cost, bulk_figures, grid
+from . import bulk, bulk_cells, bulk_cost, bulk_figures
 from .analysis import StudyInputError, strain_edges
 from .cli import read_yaml
 
@@ -43,7 +44,7 @@ def estimate(args) -> int:
     print(per_cell.drop(columns="est_core_s").to_string(float_format=lambda x: f"{x:.3g}"))
     total = est["est_core_s"].sum()
     print(f"{len(est)} DEM cases: {total / 3600:.2f} core-hours; "
-          f"about {grid.makespan(est['est_core_s'], args.cores) / 3600:.2f} h on {args.cores} cores")
+          f"about {makespan(est['est_core_s'], args.cores) / 3600:.2f} h on {args.cores} cores")
     return 0
 
 

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import yaml
 
+from campaign.schedule import makespan
 from dem_contract import DEMInputError
 from dem_contract.tables import read_table
 
@@ -107,7 +108,7 @@ def estimate(args) -> int:
     print(est[["point", "N", "steps", "est_core_s"]].to_string(float_format=lambda x: f"{x:.4g}"))
     total = est["est_core_s"].sum()
     print(f"{len(est)} DEM cases: {total / 3600:.2f} core-hours; "
-          f"about {grid.makespan(est['est_core_s'], args.cores) / 3600:.2f} h on {args.cores} cores")
+          f"about {makespan(est['est_core_s'], args.cores) / 3600:.2f} h on {args.cores} cores")
     return 0
 
 

@@ -16,6 +16,7 @@ import math
 
 import pandas as pd
 
+from campaign import cost
 from campaign.scenes import scene_from_config
 
 # axis -> (config section, key, short label for point names)
@@ -38,22 +39,6 @@ FINEST = {
 }
 BASE_LABEL = "base"
 REPEAT_PREFIX = "repeat:"
-
-# Throughput of YADE 2023.02a on one thread, particle-steps/s, at 500 and 5,000
-# disks; interpolated log-log in N, held constant outside. 500 disks: the
-# `particle_steps_per_s` of the quick campaign's sidecars (496 disks, kappa 1e3,
-# 2 cores with two YADE jobs side by side) read 2.2-2.5 M; we take 2.3 M.
-# 5,000 disks: 0.8 M (python3 tools/benchmark.py, README "Accuracy and cost").
-THROUGHPUT_500 = 2.3e6
-THROUGHPUT_5000 = 0.8e6
-THROUGHPUT = ((500, THROUGHPUT_500), (5000, THROUGHPUT_5000))
-# Pack: simulated time to converge, in d*sqrt(rho/p), with the damped, quenched
-# packing (docs/scene.md "Packing"), measured 2026-11-23 at kappa = 1e3, dt = 0.1 t_c,
-# ke_max 1e-4: 44-61 for 2,000 disks (wall and periodic cells), 89-99 for the
-# 5,010-disk paper cell (the old undamped packing: 293 at 496 disks, 665 at 211).
-# The largest is assumed for every setting. It costs steps like any other time.
-PACK_TIME = 100.0
-
 
 def fmt(x: float) -> str:
     """A short, path-safe number: 1e4 -> '10000', 3e-3 -> '0.003'."""
@@ -175,46 +160,12 @@ def unique_points(table: pd.DataFrame) -> pd.DataFrame:
 
 # --- cost estimate ----------------------------------------------------------
 
-def n_disks(H_over_d: float, W_over_H: float, guess: float = 0.8,
-            size_min: float = 0.5, size_max: float = 1.5) -> int:
-    """Grains in the cell, as yade_scripts counts them (docs/scene.md, pack.solid_fraction_guess)."""
-    mean_d2 = (size_max**3 - size_min**3) / (3 * (size_max - size_min))
-    W = W_over_H * H_over_d
-    return round(guess * W * (H_over_d - 1) / (math.pi * mean_d2 / 4))
-
-
-def throughput(n: float) -> float:
-    """Particle-steps per second on one thread for n disks (``THROUGHPUT``)."""
-    (n0, r0), (n1, r1) = THROUGHPUT
-    f = min(max(math.log(n / n0) / math.log(n1 / n0), 0.0), 1.0)
-    return math.exp(math.log(r0) + f * math.log(r1 / r0))
-
-
-def steps_per_strain(kappa: float, inertial_number: float, dt_over_tc: float) -> float:
-    """1/(gammadot dt): dt = f sqrt(m_d/kn) = f sqrt(pi/(4 kappa)) d sqrt(rho/p), gammadot = I sqrt(p/rho)/d."""
-    return math.sqrt(4 * kappa / math.pi) / (inertial_number * dt_over_tc)
-
-
-def estimate_core_seconds(setting: dict, strain: float, W_over_H: float, pack_time: float | None = None,
-                          **disk_kwargs) -> float:
-    """Estimated one-thread wall time of pack + shear of ``strain`` for one setting."""
-    pack_time = PACK_TIME if pack_time is None else pack_time
-    n = n_disks(setting["H_over_d"], W_over_H, **disk_kwargs)
-    steps = steps_per_strain(setting["kappa"], setting["inertial_number"], setting["dt_over_tc"]) * strain
-    steps += pack_time * math.sqrt(4 * setting["kappa"] / math.pi) / setting["dt_over_tc"]
-    return n * steps / throughput(n)
-
-
-def makespan(costs, cores: int = 2) -> float:
-    """Longest-first list scheduling of independent jobs on ``cores``: an estimate of the wall time."""
-    loads = [0.0] * cores
-    for c in sorted(costs, reverse=True):
-        loads[loads.index(min(loads))] += c
-    return max(loads)
-
-
 def estimate(config: dict) -> pd.DataFrame:
-    """Per DEM case of the study: disks, steps and estimated one-thread seconds."""
+    """Per DEM case of the study: disks, shear steps and estimated one-thread seconds of pack + shear.
+
+    est_core_s = N (pack_steps + steps) / throughput(N), steps = steps_per_strain (preshear + heaviside strain),
+    the cost model of ``campaign.cost`` at its documented throughput.
+    """
     acc = config["accuracy"]
     strain = acc["preshear_strain"] + acc["heaviside_strain"]
     mat, pack = config["material"], config.get("pack", {})
@@ -222,10 +173,11 @@ def estimate(config: dict) -> pd.DataFrame:
               size_min=mat["size_ratio_min"], size_max=mat["size_ratio_max"])
     pts = unique_points(expand(acc))
     W = config["cell"]["W_over_H"]
-    pts["N"] = [n_disks(h, W, **kw) for h in pts["H_over_d"]]
-    pts["steps"] = [steps_per_strain(k, i, f) * strain
+    pts["N"] = [cost.n_disks(h, W, **kw) for h in pts["H_over_d"]]
+    pts["steps"] = [cost.steps_per_strain(k, i, f) * strain
                     for k, i, f in zip(pts["kappa"], pts["inertial_number"], pts["dt_over_tc"])]
-    pts["est_core_s"] = [estimate_core_seconds(row, strain, W, **kw) for row in pts.to_dict("records")]
+    pts["est_core_s"] = [cost.core_seconds(n, steps + cost.pack_steps(k, f))
+                         for n, steps, k, f in zip(pts["N"], pts["steps"], pts["kappa"], pts["dt_over_tc"])]
     return pts
 
 

@@ -10,6 +10,7 @@ import pandas as pd
 import pytest
 import yaml
 
+from campaign.schedule import makespan
 from dem_study import analysis, grid
 from dem_study.cli import main
 
@@ -90,26 +91,10 @@ def test_point_scene_changes_one_key_and_passes_the_scene_validator(paper):
         validate(grid.point_scene(paper, point), stage="heaviside")
 
 
-def test_cost_model_matches_design_facts():
-    # sqrt(4 kappa/pi)/(I dt_over_tc): ~1e5 steps per unit strain at kappa 1e3, I 1e-3 with the stable step 0.3; 3e5 at 1e4
-    assert grid.steps_per_strain(1e3, 1e-3, 0.3) == pytest.approx(1.19e5, rel=0.01)
-    assert grid.steps_per_strain(1e4, 1e-3, 0.3) / grid.steps_per_strain(1e3, 1e-3, 0.3) == pytest.approx(math.sqrt(10))
-    assert grid.n_disks(37, 4) == pytest.approx(5000, rel=0.01)
-    assert grid.n_disks(12, 4) == pytest.approx(500, rel=0.01)
-    assert grid.makespan([3, 2, 2, 1], cores=2) == 4
-
-
-def test_throughput_interpolates_the_measured_points_log_log_and_holds_outside():
-    (n0, r0), (n1, r1) = grid.THROUGHPUT
-    assert grid.throughput(n0) == pytest.approx(r0) and grid.throughput(n1) == pytest.approx(r1)
-    assert grid.throughput(math.sqrt(n0 * n1)) == pytest.approx(math.sqrt(r0 * r1))   # straight in log-log
-    assert grid.throughput(n0 / 10) == pytest.approx(r0) and grid.throughput(n1 * 10) == pytest.approx(r1)
-
-
 def test_default_subset_takes_about_half_an_hour_on_two_cores(paper):
     # 0.48 h with the damped packing's PACK_TIME (100 time units); 0.85 h with the former 665
     est = grid.estimate({**paper, "accuracy": {**paper["accuracy"], "repeat": {}}})
-    hours = grid.makespan(est["est_core_s"], 2) / 3600
+    hours = makespan(est["est_core_s"], 2) / 3600
     assert 0.35 < hours < 0.7, hours
     with_repeats = grid.estimate(paper)
     assert len(with_repeats) == len(est) + 3 and with_repeats["est_core_s"].sum() > est["est_core_s"].sum()

@@ -3,12 +3,10 @@
 # `--default-resources ...` on the command line (which replaces the profile's
 # whole default-resources block) cannot strip them.
 #
-# DEM stages: from the scene's projected particle-steps and the measured
-# one-thread throughput (dem_study/grid.py: THROUGHPUT, steps_per_strain,
-# PACK_TIME, n_disks),
-#     seconds = N * steps / throughput(N),
-#     steps   = sqrt(4 kappa/pi) / (I dt_over_tc) * strain     (shear stages)
-#             = PACK_TIME * sqrt(4 kappa/pi) / dt_over_tc       (pack),
+# DEM stages: the projected one-thread seconds of the stage (campaign/cost.py, the one cost
+# model: N * steps / throughput(N) from the scene's kappa, I, dt_over_tc, strain and pack time),
+# at the documented throughput, not this machine's: a cluster node is not this machine, and
+# DEM_SAFETY was measured against the documented figure,
 #     runtime = ceil(attempt * (DEM_SAFETY * seconds / 60 + DEM_OVERHEAD_MIN)).
 # Measured on the quick preset (496 disks, two YADE jobs on 2 shared cores): the
 # stages took 0.7-2.1 times this estimate; DEM_SAFETY = 3 covers that and a
@@ -20,7 +18,9 @@
 import math
 from collections import namedtuple
 
-from dem_study import grid as _grid
+from campaign.cost import scene_disks, scene_stages
+from campaign.cost import stage_seconds as dem_seconds
+from campaign.schedule import after_seconds, longest_chain
 
 DEM_SAFETY = 3.0
 DEM_OVERHEAD_MIN = 2.0  # YADE start, loading a state, writing outputs
@@ -34,26 +34,6 @@ def _scene_of(wc):
     if "bulkcase" in wc.keys():
         return bulk_scene(wc.bulkcase)
     return point_scene(wc.point)
-
-
-def dem_seconds(scene, stage):
-    """Projected one-thread seconds of one DEM stage of ``scene`` (see the header)."""
-    mat, geo = scene["material"], scene["geometry"]
-    n = _grid.n_disks(geo["H_over_d"], geo["W_over_H"],
-                      guess=scene.get("pack", {}).get("solid_fraction_guess", 0.8),
-                      size_min=mat["size_ratio_min"], size_max=mat["size_ratio_max"])
-    dt_over_tc = scene["timestep"]["dt_over_tc"]
-    if stage == "pack":
-        steps = _grid.PACK_TIME * math.sqrt(4 * mat["kappa"] / math.pi) / dt_over_tc
-    else:
-        steps = _grid.steps_per_strain(mat["kappa"], scene["loading"]["inertial_number"], dt_over_tc)
-        if stage in scene:
-            steps *= scene[stage]["strain"]
-        else:   # a reversal schedule: the sum of its segments' strains (campaign.scene_spec)
-            from campaign.scene_spec import protocol_strain
-
-            steps *= protocol_strain(stage, scene["schedules"][stage])
-    return n * steps / _grid.throughput(n)
 
 
 def dem_runtime(stage=None):
@@ -87,13 +67,10 @@ def dem_priority(stage=None):
     def priority(wc):
         name = stage or wc.protocol
         scene = _scene_of(wc)
-        reversals = [k for k in scene if k in PROTOCOLS] + list(scene.get("schedules", {}))
-        longest_reversal = max((dem_seconds(scene, r) for r in reversals), default=0.0)
-        after = {"preshear": longest_reversal}
-        after["pack"] = dem_seconds(scene, "preshear") + after["preshear"]
-        after["scene"] = dem_seconds(scene, "pack") + after["pack"]
-        own = 0.0 if name == "scene" else dem_seconds(scene, name)
-        return DEM_PRIORITY + round(own + after.get(name, 0.0))
+        seconds = {s: dem_seconds(scene, s) for s in scene_stages(scene)}
+        if name == "scene":
+            return DEM_PRIORITY + round(longest_chain({"case": seconds}))
+        return DEM_PRIORITY + round(seconds[name] + after_seconds(seconds)[name])
 
     return priority
 
@@ -105,10 +82,7 @@ def set_priority(wc):
 
 
 def dem_mem_mb(wc):
-    scene = _scene_of(wc)
-    mat, geo = scene["material"], scene["geometry"]
-    n = _grid.n_disks(geo["H_over_d"], geo["W_over_H"],
-                      size_min=mat["size_ratio_min"], size_max=mat["size_ratio_max"])
+    n = scene_disks(_scene_of(wc))
     return max(1000, math.ceil(DEM_MEM_SAFETY * (250 + 0.05 * n)))
 
 
