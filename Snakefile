@@ -24,6 +24,12 @@ import preflight
 preflight.stop_on_problems(preflight.check(config, workflow.configfiles))
 validate(config, "workflow/schemas/config.schema.yaml")  # fills the schema's defaults
 
+# The price of the campaign's DEM on the cores given (-j), before any job; once, not in a cluster job.
+from preflight import price as preflight_price
+
+if workflow.is_main_process:
+    preflight_price.print_price(config, preflight_price.workflow_cores(workflow))
+
 
 include: "workflow/rules/common.smk"
 include: "workflow/rules/resources.smk"

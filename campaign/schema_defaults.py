@@ -31,3 +31,13 @@ def block_defaults(*keys: str, path=SCHEMA) -> dict:
     for key in keys:
         node = node["properties"][key]
     return {name: prop["default"] for name, prop in node.get("properties", {}).items() if "default" in prop}
+
+
+def with_defaults(config: dict, path=SCHEMA) -> dict:
+    """``config`` with the schema's defaults filled in, in place, as the Snakefile's ``validate`` fills them
+    (``snakemake.utils.validate``): for a command that reads config files without Snakemake. It raises
+    Snakemake's WorkflowError on a config the schema refuses (the pre-flight check names those first)."""
+    from snakemake.utils import validate
+
+    validate(config, str(path))
+    return config

@@ -1,7 +1,8 @@
-"""python -m preflight check CONFIGFILE [CONFIGFILE ...]: the workflow's pre-flight check, alone.
+"""python -m preflight check CONFIGFILE [CONFIGFILE ...] [--cores N]: the workflow's pre-flight check, alone.
 
 Later files override earlier ones, as with ``snakemake --configfile a.yaml b.yaml``.
-Exit 0 when the campaign may start, 2 with one line per problem otherwise.
+Exit 0 when the campaign may start, with its price on ``--cores`` (``preflight.price``) after
+"ok"; 2 with one line per problem otherwise.
 """
 import argparse
 import sys
@@ -9,8 +10,10 @@ import sys
 from snakemake.utils import update_config
 
 from campaign.configfile import ConfigProblem, load_configfile
+from campaign.schema_defaults import with_defaults
 
 from .checks import check
+from .price import DEFAULT_CORES, price_text
 
 
 def main(argv=None) -> int:
@@ -18,6 +21,8 @@ def main(argv=None) -> int:
     sub = parser.add_subparsers(dest="command", required=True)
     c = sub.add_parser("check", help="check config files as the Snakefile does before any job")
     c.add_argument("configfiles", nargs="+")
+    c.add_argument("--cores", type=int, default=DEFAULT_CORES,
+                   help=f"cores the campaign's DEM jobs run on, for its price (snakemake -j; default {DEFAULT_CORES})")
     args = parser.parse_args(argv)
     config = {}
     try:
@@ -31,6 +36,7 @@ def main(argv=None) -> int:
         print("\n".join(problems), file=sys.stderr)
         return 2
     print(f"{', '.join(args.configfiles)}: ok")
+    print(price_text(with_defaults(config), max(args.cores, 1)))
     return 0
 
 
