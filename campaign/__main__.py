@@ -1,8 +1,11 @@
-"""python -m campaign estimate --configfile FILE [FILE ...] [--cores N]: a campaign's DEM, priced.
+"""python -m campaign estimate|status --configfile FILE [FILE ...] [--cores N]: a campaign's DEM, priced or followed.
 
 - ``estimate``: every DEM stage of every case with its disks, steps and projected one-thread
   seconds, the throughput it was priced at, and the totals (``campaign.price``): what the
   pre-flight check sums up in one line before any job.
+- ``status``: a running or stopped campaign's cases done, running (each stage's progress and ETA)
+  and waiting, core-hours spent and left, the ETA of its DEM, and where a stopped stage resumes
+  (``campaign.status``). Read only.
 
 Later files override earlier ones, as with ``snakemake --configfile a.yaml b.yaml``; the schema's
 defaults are filled in as the Snakefile fills them. Exit 0, or 2 naming a config that cannot be read.
@@ -18,6 +21,7 @@ from dem_contract.release import merge_config
 from .configfile import ConfigProblem, load_configfile
 from .price import duration, price, price_lines
 from .schema_defaults import with_defaults
+from .status import campaign_status, status_lines
 
 DEFAULT_CORES = 2
 
@@ -47,7 +51,8 @@ def estimate(config: dict, cores: int) -> list[str]:
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="python -m campaign", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
-    for name, text in (("estimate", "every DEM stage's projected cost, and the totals, before the run"),):
+    for name, text in (("estimate", "every DEM stage's projected cost, and the totals, before the run"),
+                       ("status", "a running or stopped campaign: done, running, waiting, core-hours, ETA")):
         c = sub.add_parser(name, help=text)
         c.add_argument("--configfile", nargs="+", required=True, help="the campaign's config file(s)")
         c.add_argument("--cores", type=int, default=DEFAULT_CORES,
@@ -57,7 +62,8 @@ def main(argv=None) -> int:
         parser.error(f"--cores {args.cores}: must be at least 1")
     try:
         config = read_config(args.configfile)
-        lines = estimate(config, args.cores)
+        lines = (estimate(config, args.cores) if args.command == "estimate"
+                 else status_lines(campaign_status(config, args.cores)))
     except (ConfigProblem, DEMInputError, OSError) as exc:
         print(exc, file=sys.stderr)
         return 2
