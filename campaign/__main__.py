@@ -19,7 +19,7 @@ from dem_contract import DEMInputError
 from dem_contract.release import merge_config
 
 from .configfile import ConfigProblem, load_configfile
-from .price import duration, price, price_lines
+from .price import duration, plural, price, price_lines
 from .schema_defaults import with_defaults
 from .status import campaign_status, status_lines
 
@@ -41,7 +41,7 @@ def estimate(config: dict, cores: int) -> list[str]:
     lines = [table.to_string(index=False), f"throughput: {p.throughput.source}"]
     if p.throughput.measured:
         lines.append(f"  (the documented figure x {p.throughput.factor:.3g})")
-    lines.append(f"total: {p.core_s / 3600:.3g} core-hours; about {duration(p.wall_s)} on {cores} cores; "
+    lines.append(f"total: {p.core_s / 3600:.3g} core-hours; about {duration(p.wall_s)} on {plural(cores, 'core')}; "
                  f"{duration(p.cluster_s)} on a cluster with one core per job")
     lines.append("against the quick preset: " + "; ".join(text for ratio, text in p.drivers if ratio > 1.0)
                  if any(ratio > 1.0 for ratio, _ in p.drivers) else "against the quick preset: no setting costlier")

@@ -41,7 +41,8 @@ DOCUMENTED_SOURCE = "the documented figure (YADE 2023.02a: 2.3 M particle-steps/
 # Pack: simulated time to converge, in d sqrt(rho/p), with the damped, quenched packing
 # (docs/scene.md "Packing"), measured 2026-11-23 at kappa = 1e3, dt = 0.1 t_c, ke_max 1e-4: 44-61
 # for 2,000 disks (wall and periodic cells), 89-99 for the 5,010-disk paper cell. The largest is
-# assumed for every setting (an upper bound: the narrow cell packs in 37-80).
+# assumed for every setting; the narrow cell at dt = 0.3 t_c packed in 91-141 at kappa 1e3, 49-77 at
+# 1e4 and 43-51 at 1e5 (docs/findings.md, "The cost model against measured runs").
 PACK_TIME = 100.0
 #: Stages every case runs before its reversal runs.
 BASE_STAGES = ("pack", "preshear")
@@ -109,11 +110,15 @@ def measured_throughput(results_dir, folder: str = "dem", exclude=()) -> Through
 
     factor = sum_i (N_i steps_i / documented_throughput(N_i)) / sum_i cpu_time_s_i
 
-    over every stage sidecar found (``read_cost_sidecars``): the documented curve's shape in N,
+    over the stage sidecars found (``read_cost_sidecars``): the documented curve's shape in N,
     scaled to this machine (at a single N, factor x documented(N) = sum N steps / sum cpu_time_s).
+    Only the shear stages' when there are any: they are most of a campaign's cost, and a pack
+    runs faster per particle-step (4.1 M against 2.9 M at kappa 1e5 on the narrow cell).
     """
     where = Path(results_dir) / folder
     found = read_cost_sidecars(p for p in where.glob("*/*.json") if p.parent.name not in set(exclude))
+    shear = [(p, s) for p, s in found if s.get("stage", p.stem) != "pack"]
+    found, packs = (shear, "") if shear else (found, " (packs only)")
     if not found:
         return DOCUMENTED_THROUGHPUT
     projected = sum(s["N"] * s["steps"] / documented_throughput(s["N"]) for _, s in found)
@@ -122,8 +127,8 @@ def measured_throughput(results_dir, folder: str = "dem", exclude=()) -> Through
     rate = sum(s["N"] * s["steps"] for _, s in found) / cpu
     at = f"{disks[0]}" if len(disks) == 1 else f"{disks[0]}-{disks[-1]}"
     cases = len({p.parent for p, _ in found})
-    source = (f"measured on this machine: {len(found)} stage sidecars of {cases} case{'s' * (cases != 1)} in {where}, "
-              f"{rate / 1e6:.2g} M particle-steps per CPU second at {at} disks")
+    source = (f"measured on this machine: {len(found)} stage sidecars{packs} of {cases} case{'s' * (cases != 1)} "
+              f"in {where}, {rate / 1e6:.2g} M particle-steps per CPU second at {at} disks")
     return Throughput(projected / cpu, source, tuple(str(p) for p, _ in found))
 
 

@@ -16,7 +16,8 @@ A stage is done (sidecar), restored (its case taken from a data release), runnin
 or a checkpoint, no live owner: killed, or a guard fired) or waiting. Core-hours spent are the
 finished stages' CPU; core-hours left are the cost model's (``campaign.cost``, documented
 throughput) for what is not done, times the measured / projected ratio of the finished stages,
-packs and shear stages apart (the pack's projection is an upper bound). The campaign's ETA
+packs and shear stages apart (a pack's time to converge varies with kappa more than the model
+says; a shear stage's steps are exact). The campaign's ETA
 schedules what is left on the cores in use (``campaign.schedule.chain_makespan``: the running
 stages first, each at its log's ETA), at the wall / CPU ratio the finished stages ran at.
 """

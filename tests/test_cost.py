@@ -7,7 +7,6 @@ and its seconds against their measured CPU time.
 """
 import json
 import math
-import shutil
 
 import pytest
 
@@ -82,14 +81,14 @@ def test_documented_throughput_interpolates_its_two_points_log_log_and_holds_out
 
 def test_the_model_gives_the_steps_and_disks_real_runs_took():
     """Every shear stage of the deciding release (pre-shear, sinusoidal, a train, a schedule): the steps
-    YADE ran; the pack: its projection bounds them (PACK_TIME is the slowest packing measured)."""
+    YADE ran; the pack, which runs until it converges: within a factor 3 of its projection."""
     stages = released_sidecars()
     assert {stage for _, stage, _ in stages} == {"pack", "preshear", "sinusoidal", "train03", "train05"}
     for case, stage, side in stages:
         scene = side["scene"]
         assert cost.scene_disks(scene) == side["N"], case
         if stage == "pack":
-            assert side["steps"] <= cost.stage_steps(scene, stage), case
+            assert 1 / 3 < side["steps"] / cost.stage_steps(scene, stage) < 3, case
         else:
             assert cost.stage_steps(scene, stage) == side["steps"], (case, stage)
 
@@ -104,18 +103,25 @@ def test_the_documented_throughput_prices_real_runs_within_the_stated_factor():
 def test_a_throughput_measured_on_some_seeds_prices_the_others_to_a_few_percent(tmp_path):
     learned = cost.measured_throughput(results_with(tmp_path, released_sidecars({1, 3})))
     assert learned.measured and learned.factor != 1.0
-    assert "measured on this machine: 10 stage sidecars of 2 cases" in learned.source
-    others = released_sidecars({4, 5, 6})
+    assert "measured on this machine: 8 stage sidecars of 2 cases" in learned.source
+    others = [(case, stage, side) for case, stage, side in released_sidecars({4, 5, 6}) if stage != "pack"]
     projected = sum(cost.stage_seconds(side["scene"], stage, learned) for _, stage, side in others)
     measured = sum(side["cpu_time_s"] for _, _, side in others)
     assert projected / measured == pytest.approx(1.0, abs=0.05)
 
 
-def test_the_measured_throughput_is_the_runs_own_rate_at_their_disk_count(tmp_path):
+def test_the_measured_throughput_is_the_shear_stages_own_rate_at_their_disk_count(tmp_path):
     stages = released_sidecars({1})
     t = cost.measured_throughput(results_with(tmp_path, stages))
-    rate = sum(s["N"] * s["steps"] for _, _, s in stages) / sum(s["cpu_time_s"] for _, _, s in stages)
-    assert t(626) == pytest.approx(rate)
+    shear = [side for _, stage, side in stages if stage != "pack"]
+    assert t(626) == pytest.approx(sum(s["N"] * s["steps"] for s in shear) / sum(s["cpu_time_s"] for s in shear))
+
+
+def test_packs_alone_measure_the_throughput_until_a_shear_stage_is_done(tmp_path):
+    packs = [(case, stage, side) for case, stage, side in released_sidecars({1, 3}) if stage == "pack"]
+    t = cost.measured_throughput(results_with(tmp_path, packs))
+    assert "2 stage sidecars (packs only) of 2 cases" in t.source
+    assert t(626) == pytest.approx(sum(s["N"] * s["steps"] for *_, s in packs) / sum(s["cpu_time_s"] for *_, s in packs))
 
 
 def test_without_sidecars_or_with_other_json_files_only_the_documented_figure_is_used(tmp_path):
@@ -129,12 +135,11 @@ def test_without_sidecars_or_with_other_json_files_only_the_documented_figure_is
 
 
 def test_cases_left_out_of_the_measurement_are_not_read(tmp_path):
-    stages = released_sidecars({1, 3})
-    results_with(tmp_path, stages)
-    shutil.copy(tmp_path / "dem" / "p100000_I0.001_s1" / "pack.json", tmp_path / "dem" / "p100000_I0.001_s3" / "x.json")
+    results_with(tmp_path, released_sidecars({1, 3}))
     both = cost.measured_throughput(tmp_path)
     one = cost.measured_throughput(tmp_path, exclude={"p100000_I0.001_s3"})
-    assert "11 stage sidecars of 2 cases" in both.source and "5 stage sidecars of 1 case in" in one.source
+    assert "8 stage sidecars of 2 cases" in both.source and "4 stage sidecars of 1 case in" in one.source
+    assert one.sidecars == tuple(p for p in both.sidecars if "_s3" not in p)
 
 
 # --- schedule ------------------------------------------------------------------------------
