@@ -23,6 +23,8 @@ from pathlib import Path
 
 import pandas as pd
 
+from dem_contract.release import CASES_DIR, released_cases
+
 from .cases import cases
 from .configfile import load_configfile
 from .cost import (DOCUMENTED_THROUGHPUT, Throughput, core_seconds, documented_throughput, measured_throughput,
@@ -46,8 +48,6 @@ def restored_cases(config: dict, scenes: dict, root=ROOT) -> dict:
     (workflow/rules/release.smk: released with every protocol, from the scene this config makes)."""
     if not config.get("release"):
         return {}
-    from dem_contract.release import CASES_DIR, released_cases
-
     out = {}
     for label, folder in released_cases(config["release"], list(config["protocols"]), root).items():
         if label in scenes:

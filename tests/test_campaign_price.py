@@ -70,6 +70,17 @@ def test_the_largest_ratio_to_the_quick_preset_names_the_driver():
     assert text.startswith("kappa 1e5, 10 times slower") and ratio == pytest.approx(10)
 
 
+def test_a_dem_study_the_config_runs_is_priced_on_a_line_of_its_own(tmp_path):
+    paper = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
+    r = preflight_check(write(tmp_path, paper))
+    assert r.returncode == 0, r.stderr
+    lines = r.stdout.splitlines()
+    assert lines[1].startswith("price: campaign paper: 4 DEM cases, 34 core-hours")
+    assert "the cell of 5010 disks, 21 times slower per step than the quick preset's 626" in lines[2]
+    assert lines[3].startswith("price: and the DEM resolution study (accuracy.dem_study): 19 DEM cases, 1.4 "
+                               "core-hours, about ")
+
+
 def test_a_campaign_restored_from_its_release_costs_no_dem(tmp_path):
     r = preflight_check(write(tmp_path, DECIDE))
     assert r.returncode == 0, r.stderr
