@@ -110,7 +110,8 @@ class Price:
 
 
 def price(config: dict, cores: int = 2, root=ROOT, reference=QUICK) -> Price:
-    """The price of the campaign of ``config`` (as Snakemake holds it) on ``cores``, against ``reference``."""
+    """The price of the campaign of ``config`` (its schema defaults filled in, as the Snakefile holds it after
+    ``validate``) on ``cores``, against ``reference``."""
     scenes = campaign_scenes(config)
     restored = restored_cases(config, scenes, root)
     throughput = measured_throughput(config.get("results_dir", "results"), exclude=restored)

@@ -10,7 +10,9 @@ Read only, from what the DEM stages write (nothing is locked, nothing written):
 - ``<case_dir>/.partial/<stage>.lock``, the stage lock (yade_scripts/stagelock.py): the stage runs
   while the process it names lives (on this host) and renews it (within ``STALE_S``);
 - ``<case_dir>/.partial/<stage>/resume.json``, the checkpoint (yade_scripts/checkpoint.py): a
-  stopped stage resumes from it, at step ``iter`` minus the steps of the stages before it.
+  stopped stage resumes from it, at step ``iter`` minus the steps of the stages before it, if it
+  was made from the case's ``scene.json`` and the config still makes that scene (else the stage
+  discards it and starts over).
 
 A stage is done (sidecar), restored (its case taken from a data release), running, stopped (a log
 or a checkpoint, no live owner: killed, or a guard fired) or waiting. Core-hours spent are the
@@ -23,6 +25,7 @@ stages first, each at its log's ETA), at the wall / CPU ratio the finished stage
 """
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import re
@@ -31,9 +34,10 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .cost import BASE_STAGES, PACK_TIME, core_seconds, scene_disks, scene_stages, scene_value, stage_steps
+from .cost import BASE_STAGES, PACK_TIME, scene_stages, scene_value, stage_seconds, stage_steps
 from .price import ROOT, campaign_scenes, duration, plural, restored_cases
 from .scene_spec import yade_scripts_module
+from .scenes import result_key
 from .schedule import chain_makespan
 
 PROGRESS = re.compile(r"^\[(?P<stage>[^\]]+)\] (?P<what>[^|]*)\|\s*(?P<pct>[0-9.]+)% \|.*\| ETA (?P<eta>\S+) s")
@@ -112,6 +116,7 @@ class StageStatus:
     checkpoint: dict | None = None  # resume.json of a stopped or running stage
     owner: dict | None = None
     last_line: str = ""             # a stopped stage's log, last line
+    stale: str = ""                 # why a rerun would discard the checkpoint (``stale_checkpoint``)
 
     @property
     def kind(self) -> str:
@@ -121,7 +126,7 @@ class StageStatus:
 def stage_status(results_dir, label: str, scene: dict, stage: str, restored: bool) -> StageStatus:
     """The state of one stage of one case (module docstring)."""
     case_dir = Path(results_dir) / "dem" / label
-    projected = core_seconds(scene_disks(scene), stage_steps(scene, stage))
+    projected = stage_seconds(scene, stage)
     side = read_json(case_dir / f"{stage}.json")
     if side is not None and "cpu_time_s" in side:
         return StageStatus(label, stage, "restored" if restored else "done", projected,
@@ -137,10 +142,11 @@ def stage_status(results_dir, label: str, scene: dict, stage: str, restored: boo
         return StageStatus(label, stage, "running", projected, fraction=fraction, eta_s=progress.get("eta_s"),
                            at=progress.get("at", ""), checkpoint=checkpoint, owner=owner)
     if lines or checkpoint:
-        fraction = _checkpoint_fraction(case_dir, scene, stage, checkpoint) if checkpoint else 0.0
+        stale = stale_checkpoint(case_dir, scene, checkpoint) if checkpoint else ""
+        fraction = _checkpoint_fraction(case_dir, scene, stage, checkpoint) if checkpoint and not stale else 0.0
         last = next((line for line in reversed(lines) if line.strip()), "")
         return StageStatus(label, stage, "stopped", projected, fraction=fraction, checkpoint=checkpoint,
-                           last_line=last.strip()[:160])
+                           last_line=last.strip()[:160], stale=stale)
     return StageStatus(label, stage, "waiting", projected)
 
 
@@ -152,6 +158,24 @@ def _stage_fraction(scene, stage, log_fraction) -> float:
         return min(log_fraction, 1.0)
     max_time = scene_value(scene, "pack", "max_time")
     return min(log_fraction * max_time / min(PACK_TIME, max_time), 0.95)
+
+
+def stale_checkpoint(case_dir, scene: dict, checkpoint: dict) -> str:
+    """Why a rerun would discard ``checkpoint`` rather than resume from it; empty when it resumes.
+
+    The stage resumes only from a checkpoint of the scene file it reads (yade_scripts/checkpoint.py
+    compares their sha256), and Snakemake writes the case a new scene file when the config's scene
+    differs from it in anything that enters the result (``campaign.scenes.result_key``).
+    """
+    try:
+        text = (Path(case_dir) / "scene.json").read_text()
+    except OSError:
+        return "the case has no scene file"
+    if hashlib.sha256(text.encode()).hexdigest() != checkpoint.get("scene_sha256"):
+        return "its checkpoint is of another scene file"
+    if result_key(json.loads(text)) != result_key(scene):
+        return "the config has changed the scene since: the case is rerun from its pack"
+    return ""
 
 
 def _checkpoint_fraction(case_dir, scene, stage, checkpoint) -> float:
@@ -256,19 +280,23 @@ def _stage_text(st: StageStatus) -> str:
         pid = f" (PID {st.owner.get('pid')})" if st.owner and "pid" in st.owner else ""
         return f"{st.stage} running {100 * st.fraction:.1f} %{at}{eta}{pid}"
     if st.state == "stopped":
-        return f"{st.stage} stopped" + (f" (checkpoint at {100 * st.fraction:.0f} %)" if st.checkpoint else "")
+        return f"{st.stage} stopped" + (f" (checkpoint at {100 * st.fraction:.0f} %)" if st.checkpoint and not st.stale
+                                         else "")
     return f"{st.stage} {st.state}"
 
 
 def resume_text(st: StageStatus) -> str:
     """Where a stopped stage goes on when the campaign is run again."""
-    if st.checkpoint:
-        where = f"from its checkpoint at {100 * st.fraction:.0f} %" if st.fraction > 0 else "from its checkpoint"
+    if st.checkpoint and st.stale:
+        what = f"starts over ({st.stale})"
+    elif st.checkpoint:
+        where = f"resumes from its checkpoint at {100 * st.fraction:.0f} %" if st.fraction > 0 else \
+            "resumes from its checkpoint"
         what = (f"{where} (iteration {st.checkpoint.get('iter')}, {st.checkpoint.get('rows')} rows, "
                 f".partial/{st.stage}/{st.checkpoint.get('checkpoint')})")
     else:
-        what = "from its start (no checkpoint)"
-    return f"{st.case} {st.stage} resumes {what}" + (f"; its log ends: {st.last_line}" if st.last_line else "")
+        what = "starts over (no checkpoint)"
+    return f"{st.case} {st.stage} {what}" + (f"; its log ends: {st.last_line}" if st.last_line else "")
 
 
 def status_lines(s: CampaignStatus) -> list[str]:

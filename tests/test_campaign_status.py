@@ -5,6 +5,7 @@ stage logs with progress lines as yade_scripts/sampling.py prints them, the chec
 resume.json, the stage lock's record), with known numbers; then on a tiny real campaign run by
 YADE and killed half-way, which must resume where the status says.
 """
+import hashlib
 import json
 import os
 import subprocess
@@ -88,15 +89,18 @@ def half_done(tmp_path):
         "[preshear] strain 0.5501 |  45.5% | t 545.53 | 4.24e+05 particle-steps/s | ETA 364 s",
         "[preshear] checkpoint at iteration 239140 (382 rows, written in 0.06 s)",
         "[preshear] strain 0.5870 |  48.5% | t 582.10 | 4.21e+05 particle-steps/s | ETA 340 s"])
+    scene_file = results / "dem" / s2 / "scene.json"
+    write_scene(scenes[s2], scene_file)
     partial = results / "dem" / s2 / ".partial" / "preshear"
     partial.mkdir(parents=True)
-    (partial / "resume.json").write_text(json.dumps(dict(checkpoint="ckpt_a.yade.gz", iter=PACK_STEPS + 210000,
-                                                         rows=382, scene_sha256="d088")))
+    (partial / "resume.json").write_text(json.dumps(dict(
+        checkpoint="ckpt_a.yade.gz", iter=PACK_STEPS + 210000, rows=382,
+        scene_sha256=hashlib.sha256(scene_file.read_text().encode()).hexdigest())))
     lock(results, s2, "preshear", dead_pid())          # SIGKILL leaves the lock file behind
     write_log(results, s3, "pack", ["[pack] phase compress |   2.5% | t 50.00 | 8.1e+05 particle-steps/s | "
                                     "ETA 300 s (at most)"])
     lock(results, s3, "pack", os.getpid())             # a live owner on this host
-    return dict(config=config, path=path, scenes=scenes, labels=(s1, s2, s3), spent=spent)
+    return dict(config=config, path=path, scenes=scenes, labels=(s1, s2, s3), spent=spent, results=results)
 
 
 def test_each_stage_is_done_stopped_running_or_waiting(half_done):
@@ -117,6 +121,18 @@ def test_a_killed_stage_resumes_from_its_checkpoint_not_from_its_last_progress_l
     assert status.resume_text(stopped).startswith(
         f"{stopped.case} preshear resumes from its checkpoint at 47 % (iteration 239140, 382 rows, "
         ".partial/preshear/ckpt_a.yade.gz); its log ends: [preshear] strain 0.5870")
+
+
+def test_a_checkpoint_of_another_scene_is_not_resumed_from(half_done):
+    config = half_done["config"]
+    changed = {**config, "material": {**config["material"], "friction": 0.3}}
+    stopped = next(st for st in status.campaign_status(changed).stages if st.state == "stopped")
+    assert stopped.fraction == 0 and status.resume_text(stopped).startswith(
+        f"{stopped.case} preshear starts over (the config has changed the scene since: the case is rerun")
+    resume = half_done["results"] / "dem" / stopped.case / ".partial" / "preshear" / "resume.json"
+    resume.write_text(json.dumps({**json.loads(resume.read_text()), "scene_sha256": "0" * 64}))
+    stopped = next(st for st in status.campaign_status(config).stages if st.state == "stopped")
+    assert "starts over (its checkpoint is of another scene file)" in status.resume_text(stopped)
 
 
 def test_core_hours_spent_are_the_sidecars_and_left_the_model_scaled_by_what_is_done(half_done):
