@@ -9,8 +9,8 @@ It holds what the schema (``workflow/schemas/config.schema.yaml``) cannot say:
 non-finite numbers, keys that must agree with each other (sampling intervals,
 bulk band and gap, a protocol's strains), case labels that two values would
 share, calibration sets and the sensitivity set naming what the campaign does
-not have, extra calibrate / compare options their parsers refuse, the results
-folder, and duplicated keys in the config file's text (``configfile``: a YAML
+not have, extra calibrate / compare options their parsers refuse or the
+workflow passes itself (``options``), the results folder, and duplicated keys in the config file's text (``configfile``: a YAML
 loader otherwise lets the last one win). Last, every scene the
 campaign would write is checked by yade_scripts' own validator, so nothing the
 DEM would refuse reaches its first job.
@@ -30,7 +30,12 @@ from campaign.configfile import ConfigProblem, configfile_problems, load_configf
 from campaign.scene_spec import inertial_number_range, protocol_strain, scene_default, scene_module
 from campaign.schema_defaults import SCHEMA, schema as read_schema
 from campaign.scenes import scene_from_config
+from campaign import stage_options
 from dem_contract.labels import case_label, format_number
+
+from .options import options_problems
+from .problems import problem
+from .problems import value_text as _v
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -45,16 +50,6 @@ SET_NAME = re.compile(r"^[A-Za-z0-9.-]+(_[A-Za-z0-9.-]+)*$")
 SOURCE_FOLDERS = {"campaign", "calibrate", "claims", "compare", "config", "dem_contract", "dem_study", "docs", "model",
                   "preflight", "profiles", "shared_stats", "tests", "tools", "workflow", "yade_scripts", "data",
                   ".git", ".snakemake"}
-
-
-def _v(x) -> str:
-    return format_number(x) if isinstance(x, float) else repr(x) if isinstance(x, str) else str(x)
-
-
-def problem(key: str, value, why: str, allowed: str | None = None, shown: str | None = None) -> str:
-    """One line: ``config error: key = value: why (allowed: ...)``; ``shown`` replaces the value's text."""
-    text = f"config error: {key} = {_v(value) if shown is None else shown}: {why}"
-    return text + (f" (allowed: {allowed})" if allowed else "")
 
 
 # --- values the schema cannot see ------------------------------------------------
@@ -92,6 +87,8 @@ def schema_problems(config: dict, schema_path=SCHEMA) -> list[str]:
                 hint = " (YAML reads a number like 1.0e5 as text: write 1.0e+5)"
             except ValueError:
                 pass
+        if error.validator == "pattern" and "title" in error.schema:   # the pattern in words
+            hint = f" (allowed: {error.schema['title']})"
         out.append(f"config error: {key or '<top level>'}: {error.message}{hint}")
     return out
 
@@ -254,17 +251,10 @@ def calibrate_min_samples(config: dict, root=ROOT) -> int:
     calibrate costs seconds at every Snakemake start).
     """
     import ast
-    import shlex
 
-    argv = shlex.split((config.get("calibration") or {}).get("options", "") or "")
-    for i, arg in enumerate(argv):
-        value = arg.split("=", 1)[1] if arg.startswith("--min-samples=") else (
-            argv[i + 1] if arg == "--min-samples" and i + 1 < len(argv) else None)
-        if value is not None:
-            try:
-                return int(value)
-            except ValueError:
-                return 0  # options_problems names it
+    given = stage_options.given(stage_options.words(config, "calibration.options")).get("--min-samples")
+    if given:
+        return int(given[0])  # (checked by options_problems before)
     tree = ast.parse((Path(root) / "calibrate" / "io.py").read_text())
     for node in tree.body:
         if isinstance(node, ast.Assign) and any(getattr(t, "id", None) == "MIN_SAMPLES" for t in node.targets):
@@ -340,52 +330,6 @@ def calibration_problems(config: dict) -> list[str]:
     if sensitivity not in built:
         out.append(problem("compare.sensitivity_set", sensitivity, "is not a calibration set",
                            ", ".join(sorted(built))))
-    return out
-
-
-def _argparse_error(parser, argv) -> str | None:
-    """argparse's own complaint about ``argv`` (its last stderr line), or None when it parses."""
-    import contextlib
-    import io
-
-    err = io.StringIO()
-    try:
-        with contextlib.redirect_stderr(err):
-            parser.parse_args(argv)
-    except SystemExit:
-        lines = err.getvalue().strip().splitlines()
-        return lines[-1].split("error: ", 1)[-1] if lines else "not accepted"
-    return None
-
-
-def options_problems(config: dict) -> list[str]:
-    """Extra command-line options of calibrate and compare, parsed by their own parsers now, not after the DEM."""
-    import shlex
-
-    out = []
-    calibration = (config.get("calibration") or {}).get("options", "")
-    compare = (config.get("compare") or {}).get("options", "")
-    checks = []
-    if calibration.strip():
-        from calibrate.__main__ import parser as calibrate_parser
-
-        checks.append(("calibration.options", calibration, calibrate_parser(), ["--dem", "d", "--out", "o"],
-                       "options of python -m calibrate --help"))
-    if compare.strip():
-        from compare.cli import build_parser
-
-        checks.append(("compare.options", compare, build_parser(),
-                       ["predict", "--dem", "d", "--params", "p", "--out", "o"],
-                       "options of python -m compare predict --help"))
-    for key, value, parser, required, allowed in checks:
-        try:
-            argv = shlex.split(value)
-        except ValueError as exc:
-            out.append(problem(key, value, f"cannot be split into options ({exc})", allowed))
-            continue
-        error = _argparse_error(parser, [*required, *argv])
-        if error:
-            out.append(problem(key, value, error, allowed))
     return out
 
 

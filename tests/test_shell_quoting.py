@@ -58,3 +58,12 @@ def test_every_placeholder_of_every_shell_command_is_quoted(rules):
     assert len(shell_rules) > 20, sorted(shell_rules)
     bad = {name: unquoted_placeholders(cmd) for name, cmd in shell_rules.items() if unquoted_placeholders(cmd)}
     assert not bad, bad
+
+
+@pytest.mark.parametrize("rule_name, key", [("calibrate", "calibration.options"), ("compare_predict", "compare.options")])
+def test_every_option_a_rule_passes_is_refused_in_its_options_string(rules, rule_name, key):
+    from preflight.options import OWNED
+
+    passed = set(re.findall(r"(?<![\w-])--[a-z][\w-]*", rules[rule_name].shellcmd))
+    owned = set(OWNED[key][1])
+    assert {"--dem", "--protocols", "--out"} <= passed <= owned, sorted(passed - owned)
