@@ -10,7 +10,8 @@ non-finite numbers, keys that must agree with each other (sampling intervals,
 bulk band and gap, a protocol's strains), case labels that two values would
 share, calibration sets and the sensitivity set naming what the campaign does
 not have, extra calibrate / compare options their parsers refuse or the
-workflow passes itself (``options``), the results folder, and duplicated keys in the config file's text (``configfile``: a YAML
+workflow passes itself (``options``), where the results folder and the releases lie
+(``paths``), and duplicated keys in the config file's text (``configfile``: a YAML
 loader otherwise lets the last one win). Last, every scene the
 campaign would write is checked by yade_scripts' own validator, so nothing the
 DEM would refuse reaches its first job.
@@ -24,16 +25,17 @@ import math
 import re
 from pathlib import Path
 
+from campaign import stage_options
 from campaign.calibration_sets import calibration_sets, same_value
 from campaign.cases import cases, rates
 from campaign.configfile import ConfigProblem, configfile_problems, load_configfile  # noqa: F401 (re-exported)
 from campaign.scene_spec import inertial_number_range, protocol_strain, scene_default, scene_module
 from campaign.schema_defaults import SCHEMA, schema as read_schema
 from campaign.scenes import scene_from_config
-from campaign import stage_options
 from dem_contract.labels import case_label, format_number
 
 from .options import options_problems
+from .paths import release_problems, results_dir_problems
 from .problems import problem
 from .problems import value_text as _v
 
@@ -46,10 +48,7 @@ QUASI_STATIC_MAX_I = 1.0e-2
 PERIODIC_MAX_W_OVER_H = 1.1
 #: Calibration set names are path parts and Snakemake wildcards (workflow/rules/common.smk).
 SET_NAME = re.compile(r"^[A-Za-z0-9.-]+(_[A-Za-z0-9.-]+)*$")
-#: Top-level folders of the repository that hold code or inputs: never a results folder.
-SOURCE_FOLDERS = {"campaign", "calibrate", "claims", "compare", "config", "dem_contract", "dem_study", "docs", "model",
-                  "preflight", "profiles", "shared_stats", "tests", "tools", "workflow", "yade_scripts", "data",
-                  ".git", ".snakemake"}
+
 
 
 # --- values the schema cannot see ------------------------------------------------
@@ -86,7 +85,8 @@ def schema_problems(config: dict, schema_path=SCHEMA) -> list[str]:
                 float(error.instance)
                 hint = " (YAML reads a number like 1.0e5 as text: write 1.0e+5)"
             except ValueError:
-                pass
+                if error.instance.lower() in ("true", "false") and "boolean" in error.validator_value:
+                    hint = f" (snakemake --config reads {error.instance} as text: write {error.instance.title()})"
         if error.validator == "pattern" and "title" in error.schema:   # the pattern in words
             hint = f" (allowed: {error.schema['title']})"
         out.append(f"config error: {key or '<top level>'}: {error.message}{hint}")
@@ -333,26 +333,6 @@ def calibration_problems(config: dict) -> list[str]:
     return out
 
 
-def results_dir_problems(config: dict, root=ROOT) -> list[str]:
-    """A results folder that is a folder of its own: not empty, not a root, not the code's."""
-    value = config.get("results_dir", "results")
-    key, allowed = "results_dir", "a folder of its own, e.g. results or /scratch/me/results"
-    if not str(value).strip():
-        return [problem(key, value, "is empty", allowed)]
-    if any(ch.isspace() for ch in str(value)):
-        return [problem(key, value, "contains white space (the rules' shell commands do not quote paths)", allowed)]
-    root = Path(root).resolve()
-    path = (root / value).resolve()
-    if path == Path(path.anchor):
-        return [problem(key, value, "is the root of the file system", allowed)]
-    if path == root or path in root.parents:
-        return [problem(key, value, "is the repository or a folder above it: outputs would mix with the code",
-                        allowed)]
-    if root in path.parents and path.relative_to(root).parts[0] in SOURCE_FOLDERS:
-        return [problem(key, value, f"lies in the repository's {path.relative_to(root).parts[0]}/ folder", allowed)]
-    return []
-
-
 def study_problems(config: dict) -> list[str]:
     """The DEM study's grid (when it runs): dem_study.grid's own checks, bulk band and width per height."""
     acc = config.get("accuracy") or {}
@@ -428,9 +408,10 @@ def check(config: dict, configfiles=(), schema_path=SCHEMA, root=ROOT) -> list[s
             and not (rate and line.startswith("config error: loading: {") and "not valid under any of" in line)]
     if out:
         return out
-    for step in (results_dir_problems, loading_problems, cell_problems, periodic_cell_key_problems,
+    out += results_dir_problems(config, root) + release_problems(config, root)
+    for step in (loading_problems, cell_problems, periodic_cell_key_problems,
                  protocol_problems, calibration_problems, options_problems, study_problems):
-        out += step(config, root) if step is results_dir_problems else step(config)
+        out += step(config)
     if not out:
         out += sample_count_problems(config, root)  # (needs intervals in order and valid options)
     return out or scene_problems(config, root)

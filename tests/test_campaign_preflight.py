@@ -14,6 +14,7 @@ import math
 import subprocess
 import sys
 from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
 
 import pytest
 import yaml
@@ -105,7 +106,30 @@ CASES = {
     "results_dir_empty": (edited(results_dir=""), ["results_dir"]),
     "results_dir_repository": (edited(results_dir="."), ["results_dir", "repository"]),
     "results_dir_code_folder": (edited(results_dir="compare"), ["results_dir", "compare/"]),
-    "results_dir_with_space": (edited(results_dir="my results"), ["results_dir", "white space"]),
+    "results_dir_with_space": (edited(results_dir="my results"), ["results_dir", "letters, digits and . _ - /"]),
+    # where results_dir and release may lie (preflight/paths.py; issue 33, item 1)
+    "results_dir_with_a_backtick": (edited(results_dir="r`touch$IFS./PWNED`"),
+                                    ["results_dir", "does not match", "no space, quote, $, backtick"]),
+    "results_dir_system_folder": (edited(results_dir="/etc"), ["results_dir", "system folder /etc"]),
+    "results_dir_system_folder_even_when_allowed": (edited(results_dir="/usr/local/results", allow_outside_tree=True),
+                                                    ["results_dir", "system folder /usr"]),
+    "results_dir_outside_the_tree": (edited(results_dir="/var/tmp/someone/results"),
+                                     ["results_dir", "outside the working tree", "allow_outside_tree: true"]),
+    "results_dir_climbing_out_of_the_tree": (edited(results_dir="results/../../elsewhere"),
+                                             ["results_dir", "outside the working tree"]),
+    "results_dir_directly_under_the_root": (edited(results_dir="/tmp", allow_outside_tree=True),
+                                            ["results_dir", "directly under /"]),
+    "results_dir_hidden_folder": (edited(results_dir=".snakemake/results"),
+                                  ["results_dir", "hidden folder (.snakemake"]),
+    "results_dir_home_folder": (edited(results_dir=str(Path.home()), allow_outside_tree=True),
+                                ["results_dir", "home folder"]),
+    "opt_in_given_as_text": (edited(results_dir="/var/tmp/x/results", allow_outside_tree="true"),
+                             ["allow_outside_tree", "write True"]),
+    "release_with_a_backtick": (edited(release="data/x`touch$IFS./PWNED`"), ["release", "does not match"]),
+    "release_outside_the_tree": (edited(release="/var/tmp/someone/data/x"),
+                                 ["release", "outside the working tree", "allow_outside_tree: true"]),
+    "release_in_a_system_folder": (edited(release=["data/bulk-decide", "/usr/share/x"], allow_outside_tree=True),
+                                   ["release[1]", "system folder /usr"]),
     "cell_too_narrow": (edited(cell={"H_over_d": 4, "W_over_H": 1}, sampling={"bulk_exclusion_d": 1}),
                         ["cell.W_over_H", "3 of the largest disks"]),
     "number_read_as_text": (CI_TEXT.replace("pressures: [1.0e+5]", "pressures: [1.0e5]"),
@@ -159,7 +183,7 @@ def config_text(edit):
 #: Cases also run through the real Snakemake dry run: one of each kind of check, so that the
 #: Snakefile's wiring (exit 2 before the DAG, no traceback, the file:line) stays tested end to end.
 END_TO_END = ["schema_range", "bulk_exclusion_fills_the_gap", "duplicated_key", "calibration_option_misspelt",
-              "results_dir_code_folder"]
+              "results_dir_code_folder", "results_dir_system_folder"]
 
 
 def write_case(folder, name):
@@ -271,6 +295,20 @@ def test_the_preflight_command_exits_2_with_one_line_naming_a_file_it_cannot_rea
                             cwd=ROOT, capture_output=True, text=True, timeout=60)
     assert result.returncode == 2 and "Traceback" not in result.stderr, result.stderr
     assert result.stderr.strip() == f"config error: {tmp_path / 'absent.yaml'}: no such file"
+
+
+def test_results_dir_on_a_scratch_disk_passes_with_allow_outside_tree():
+    config = copy.deepcopy(CI)
+    config["results_dir"] = "/work/stiff/k1e05"
+    assert [line.split(":")[1] for line in preflight.check(config)] == [" results_dir = '/work/stiff/k1e05'"]
+    config["allow_outside_tree"] = True
+    assert preflight.check(config) == []
+
+
+def test_a_relative_release_in_the_repository_passes_without_the_opt_in():
+    config = copy.deepcopy(CI)
+    config["release"] = ["data/bulk-decide", str(ROOT / "data" / "bulk-validation-paper")]
+    assert preflight.check(config) == []
 
 
 def test_config_folder_is_named():

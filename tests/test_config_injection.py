@@ -33,3 +33,24 @@ def test_calibration_options_with_a_command_substitution_are_refused_before_any_
     result = snakemake("-n", "--configfile", path, cwd=workdir)
     assert_refused_before_any_job(result, workdir, "calibration.options")
     assert "no quote, $, backtick" in result.stderr
+
+
+def test_results_dir_with_a_backtick_is_refused_before_any_job(tmp_path):
+    workdir = workflow_copy(tmp_path / "workflow")
+    results = "r`touch$IFS./PWNED`"
+    result = snakemake("-j1", "--configfile", "config/ci.yaml", "--config", f"results_dir={results}",
+                       "--", f"{results}/accuracy/ode_work_precision.csv", cwd=workdir)
+    assert_refused_before_any_job(result, workdir, "results_dir")
+    assert "letters, digits and . _ - /" in result.stderr
+
+
+def test_release_path_with_a_backtick_is_refused_before_any_job(tmp_path):
+    """A copy of data/bulk-decide (a link to it) in a folder whose name holds a command, named by ``release:``."""
+    workdir = workflow_copy(tmp_path / "workflow")
+    release = tmp_path / "rel`touch$IFS./PWNED`"
+    release.parent.mkdir()
+    release.symlink_to(ROOT / "data" / "bulk-decide")
+    result = snakemake("-j1", "--configfile", "config/bulk_decide.yaml",
+                       "--config", "results_dir=results-x", f"release={release}",
+                       "--", "results-x/dem/p100000_I0.001_s1/scene.json", cwd=workdir)
+    assert_refused_before_any_job(result, workdir, "release")

@@ -60,7 +60,8 @@ def test_every_placeholder_of_every_shell_command_is_quoted(rules):
     assert not bad, bad
 
 
-@pytest.mark.parametrize("rule_name, key", [("calibrate", "calibration.options"), ("compare_predict", "compare.options")])
+@pytest.mark.parametrize("rule_name, key", [("calibrate", "calibration.options"),
+                                           ("compare_predict", "compare.options")])
 def test_every_option_a_rule_passes_is_refused_in_its_options_string(rules, rule_name, key):
     from preflight.options import OWNED
 
