@@ -138,9 +138,15 @@ def loading_problems(config: dict) -> list[str]:
 
 
 def cell_problems(config: dict) -> list[str]:
-    """Sampling intervals in order, a bulk band inside the gap, a width for 3 disks, a packing that can compress."""
+    """Sampling intervals in order, a bulk band inside the gap, a width for 3 disks, a packing that can compress,
+    disks of more than one size."""
     out = []
     s, cell, mat, pack = config["sampling"], config["cell"], config["material"], config.get("pack") or {}
+    if mat["size_ratio_min"] >= mat["size_ratio_max"]:   # the schema allows 1 and 1 (min <= 1 <= max)
+        out.append(problem("material.size_ratio_min", mat["size_ratio_min"],
+                           f"equals material.size_ratio_max = {_v(mat['size_ratio_max'])}: disks of one size pack "
+                           "in 2D into a crystal (hexagonal order), not the disordered packing the model and the "
+                           "paper are about", "size_ratio_min < size_ratio_max (paper: 0.5 and 1.5)"))
     if s["fine_interval"] > s["coarse_interval"]:
         out.append(problem("sampling.fine_interval", s["fine_interval"],
                            f"is above sampling.coarse_interval = {_v(s['coarse_interval'])}",

@@ -130,6 +130,9 @@ CASES = {
                                  ["release", "outside the working tree", "allow_outside_tree: true"]),
     "release_in_a_system_folder": (edited(release=["data/bulk-decide", "/usr/share/x"], allow_outside_tree=True),
                                    ["release[1]", "system folder /usr"]),
+    "monodisperse_cell": (edited(material={"size_ratio_min": 1.0, "size_ratio_max": 1.0}),
+                          ["material.size_ratio_min", "size_ratio_max = 1", "crystal",
+                           "size_ratio_min < size_ratio_max"]),
     "cell_too_narrow": (edited(cell={"H_over_d": 4, "W_over_H": 1}, sampling={"bulk_exclusion_d": 1}),
                         ["cell.W_over_H", "3 of the largest disks"]),
     "number_read_as_text": (CI_TEXT.replace("pressures: [1.0e+5]", "pressures: [1.0e5]"),
@@ -183,7 +186,7 @@ def config_text(edit):
 #: Cases also run through the real Snakemake dry run: one of each kind of check, so that the
 #: Snakefile's wiring (exit 2 before the DAG, no traceback, the file:line) stays tested end to end.
 END_TO_END = ["schema_range", "bulk_exclusion_fills_the_gap", "duplicated_key", "calibration_option_misspelt",
-              "results_dir_code_folder", "results_dir_system_folder"]
+              "results_dir_code_folder", "results_dir_system_folder", "monodisperse_cell"]
 
 
 def write_case(folder, name):
