@@ -11,6 +11,7 @@ with code 2, plan no job, and print the very lines the command printed.
 """
 import copy
 import math
+import shutil
 import subprocess
 import sys
 from concurrent.futures import ThreadPoolExecutor
@@ -312,6 +313,33 @@ def test_a_relative_release_in_the_repository_passes_without_the_opt_in():
     config = copy.deepcopy(CI)
     config["release"] = ["data/bulk-decide", str(ROOT / "data" / "bulk-validation-paper")]
     assert preflight.check(config) == []
+
+
+def copy_with_preset(folder, preset, text):
+    """A working copy whose config/ is its own, with ``preset`` holding ``text`` (None: no such file)."""
+    shutil.copytree(ROOT / "config", folder / "config")
+    if text is None:
+        (folder / "config" / preset).unlink()
+    else:
+        (folder / "config" / preset).write_text(text)
+    return workflow_copy(folder)
+
+
+@pytest.mark.parametrize("target, preset", [("quick", "quick.yaml"), ("paper", "config.yaml")])
+@pytest.mark.parametrize("text, words", [(None, ": no such file"),
+                                         ("campaign: x\nloading: {pressures: [1\n", ":3: expected ',' or ']'")])
+def test_make_names_a_missing_or_malformed_preset_with_its_line_before_snakemake(tmp_path, target, preset, text,
+                                                                                 words):
+    folder = copy_with_preset(tmp_path / "copy", preset, text)
+    result = subprocess.run(["make", "-o", "setup", target], cwd=folder, capture_output=True, text=True, timeout=300)
+    assert result.returncode == 2, result.stdout + result.stderr
+    assert f"config error: config/{preset}{words}" in result.stderr, result.stderr
+    assert "snakemake" not in result.stdout and "Traceback" not in result.stderr, result.stdout + result.stderr
+
+
+def test_make_test_checks_the_ci_preset_before_the_suite():
+    plan = subprocess.run(["make", "-n", "-o", "setup", "test"], cwd=ROOT, capture_output=True, text=True, timeout=60)
+    assert plan.stdout.splitlines()[0] == ".venv/bin/python -m preflight check config/ci.yaml", plan.stdout
 
 
 def test_config_folder_is_named():
