@@ -14,6 +14,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import io
+import re
 
 from campaign import stage_options
 from campaign.stage_options import is_option, option_name
@@ -50,25 +51,26 @@ OWNED = {
 def _calibrate_parser():
     from calibrate.__main__ import parser
 
-    return parser(), ["--dem", "d", "--out", "o"]
+    return parser(), [], ["--dem", "d", "--out", "o"]
 
 
 def _compare_parser():
     from compare.cli import build_parser
 
-    return build_parser(), ["predict", "--dem", "d", "--params", "p", "--out", "o"]
+    return build_parser(), ["predict"], ["--dem", "d", "--params", "p", "--out", "o"]
 
 
-#: config key -> () -> (the program's own parser, the arguments the rule always gives it)
+#: config key -> () -> (the program's own parser, its sub-command's words, the options the rule always gives it)
 PARSERS = {"calibration.options": _calibrate_parser, "compare.options": _compare_parser}
 
 
-def option_strings(parser: argparse.ArgumentParser, command: str) -> set[str]:
-    """Every option string of ``parser`` (of its sub-command ``command``'s parser when it has sub-commands)."""
-    for action in parser._actions:
-        if isinstance(action, argparse._SubParsersAction) and command in action.choices:
-            return option_strings(action.choices[command], command)
-    return {s for action in parser._actions for s in action.option_strings}
+def option_strings(parser: argparse.ArgumentParser, command: list[str]) -> set[str]:
+    """Every option string ``command --help`` lists (the first column of its option lines)."""
+    text = io.StringIO()
+    with contextlib.redirect_stdout(text), contextlib.suppress(SystemExit):
+        parser.parse_args([*command, "--help"])
+    return {option for line in text.getvalue().splitlines() if line.startswith("  -")
+            for option in re.findall(r"(?<![\w-])--?[A-Za-z][\w-]*", re.split(r"\s{2,}", line.strip())[0])}
 
 
 def argparse_error(parser: argparse.ArgumentParser, argv: list[str]) -> str | None:
@@ -106,13 +108,13 @@ def options_problems(config: dict) -> list[str]:
         argv = stage_options.words(config, key)
         if not argv:
             continue
-        parser, required = PARSERS[key]()
-        options = option_strings(parser, command.split()[-1]) - set(owned)
+        parser, sub_command, required = PARSERS[key]()
+        options = option_strings(parser, sub_command) - set(owned)
         allowed = f"options of {command} --help except {', '.join(sorted(owned))}"
         found = [word_problem(w, options, owned) for w in argv if is_option(w)]
         out += [problem(key, value, why, allowed) for why in found if why]
         if not any(found):
-            error = argparse_error(parser, [*required, *argv])
+            error = argparse_error(parser, [*sub_command, *required, *argv])
             if error:
                 out.append(problem(key, value, error, allowed))
     return out
