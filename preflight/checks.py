@@ -50,7 +50,6 @@ PERIODIC_MAX_W_OVER_H = 1.1
 SET_NAME = re.compile(r"^[A-Za-z0-9.-]+(_[A-Za-z0-9.-]+)*$")
 
 
-
 # --- values the schema cannot see ------------------------------------------------
 
 def _walk(node, key=""):

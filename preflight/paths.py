@@ -42,11 +42,12 @@ def _under(path: Path, folder: str) -> bool:
 
 def where_problem(value: str, root: Path, home: Path) -> str | None:
     """Why ``value`` may never be used (system, home, top-level, hidden folder), or None."""
-    hidden = [part for part in Path(value).parts if part.startswith(".") and part not in (".", "..")]
-    if hidden:
-        return f"names a hidden folder ({hidden[0]}: a program's own files or settings)"
     lexical = Path(os.path.normpath(root / value))
     for path in dict.fromkeys((lexical, lexical.resolve())):
+        own = path.relative_to(root) if _under(path, str(root)) else path   # (the tree may lie in a hidden folder)
+        hidden = [part for part in own.parts if part.startswith(".") and part != "."]
+        if hidden:
+            return f"names a hidden folder ({hidden[0]}: a program's own files or settings)"
         if path == Path(path.anchor):
             return "is the root of the file system"
         system = next((s for s in SYSTEM if _under(path, s) and not any(_under(path, t) for t in SCRATCH)), None)
