@@ -191,11 +191,17 @@ def _check_bounds(path: Path, data: pd.DataFrame) -> None:
         v = pd.to_numeric(data[col], errors="coerce").to_numpy(dtype=float)
         with np.errstate(invalid="ignore"):
             bad = np.isfinite(v) & ((v <= low if low_open else v < low) | (v > high))
-        if bad.any():
-            k = int(np.argmax(bad))
-            allowed = f"{'(' if low_open else '['}{low:g}, {high:g}]"
-            raise DEMInputError(f"{path}: column '{col}' = {v[k]:.6g} at data row {k + 1} is outside its "
-                                f"physical range {allowed} ({int(bad.sum())} row(s) in all)")
+        allowed = f"{'(' if low_open else '['}{low:g}, {high:g}]"
+        _refuse_rows(path, col, v, bad, lambda k: f"is outside its physical range {allowed}")
+
+
+def _refuse_rows(path, col: str, values: np.ndarray, bad: np.ndarray, says, hint: str = "") -> None:
+    """Raise ``DEMInputError`` at the first row where ``bad`` holds: the file, the column, its value there,
+    the data row (from 1), ``says(row index)``, the number of such rows, then ``hint``."""
+    if bad.any():
+        k = int(np.argmax(bad))
+        raise DEMInputError(f"{path}: column '{col}' = {values[k]:.6g} at data row {k + 1} {says(k)} "
+                            f"({int(bad.sum())} row(s) in all){hint}")
 
 
 #: Stresses are in units of the imposed pressure p: every released run stays within 0.14-2.6 (p, p_bulk)
@@ -235,12 +241,9 @@ def check_stresses(path, data: pd.DataFrame) -> None:
         v = pd.to_numeric(data[col], errors="coerce").to_numpy(dtype=float)
         with np.errstate(invalid="ignore"):
             bad = np.abs(v) > STRESS_MAX
-        if bad.any():
-            k = int(np.argmax(bad))
-            raise DEMInputError(
-                f"{path}: column '{col}' = {v[k]:.6g} at data row {k + 1} ({int(bad.sum())} row(s) in all) is not "
-                f"of order 1: stresses are in units of the imposed pressure p (docs/data-contract.md), at most "
-                f"{STRESS_MAX:g}; a value like this looks like SI (Pa): divide the stresses by the imposed pressure")
+        _refuse_rows(path, col, v, bad, lambda k: "is not of order 1",
+                     f": stresses are in units of the imposed pressure p (docs/data-contract.md), at most "
+                     f"{STRESS_MAX:g}; a value like this looks like SI (Pa): divide the stresses by the imposed pressure")
     if not {"mu", "sigma_xy", "p"} <= set(data.columns):
         return
     mu, sxy, p = (pd.to_numeric(data[c], errors="coerce").to_numpy(dtype=float) for c in ("mu", "sigma_xy", "p"))
@@ -249,12 +252,9 @@ def check_stresses(path, data: pd.DataFrame) -> None:
     with np.errstate(invalid="ignore", divide="ignore"):
         ratio = np.abs(sxy) / p
         bad = moving & np.isfinite(mu) & np.isfinite(ratio) & (np.abs(mu - ratio) > MU_TOL)
-    if bad.any():
-        k = int(np.argmax(bad))
-        raise DEMInputError(
-            f"{path}: column 'mu' = {mu[k]:.6g} at data row {k + 1} but |sigma_xy|/p = {ratio[k]:.6g} there "
-            f"({int(bad.sum())} row(s) differ by more than {MU_TOL:g}): mu is |sigma_xy|/p of the same row "
-            f"(docs/data-contract.md); leave mu out to have it derived")
+    _refuse_rows(path, "mu", mu, bad, lambda k: f"but |sigma_xy|/p = {ratio[k]:.6g} there",
+                 f": mu is |sigma_xy|/p of its row within {MU_TOL:g} (docs/data-contract.md); leave mu out to have "
+                 f"it derived")
 
 
 def _check_strain_integral(path: Path, data: pd.DataFrame) -> None:

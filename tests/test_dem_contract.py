@@ -29,6 +29,16 @@ def write_run(path, n=60, **changes):
     return path
 
 
+def edited_run(path, columns, value, row=None):
+    """``write_run``'s run with ``columns`` set to ``value`` (or to ``value(old values)``) in ``row`` (default all)."""
+    write_run(path)
+    df = pd.read_csv(path)
+    rows = df.index if row is None else [row]
+    df.loc[rows, columns] = value(df.loc[rows, columns]) if callable(value) else value
+    df.to_csv(path, index=False)
+    return path
+
+
 def test_a_good_run_reads_with_the_asked_columns_as_floats(tmp_path):
     data = read_series(write_run(tmp_path / "preshear.csv"), min_samples=50)
     assert list(data.columns) == list(CONTRACT_COLUMNS) and len(data) == 60
@@ -127,10 +137,7 @@ def test_a_last_line_without_its_newline_is_named(tmp_path):
     ("A_xy", 50.0, r"\[-0\.5, 0\.5\]"), ("A_xx", -0.6, r"\[-0\.5, 0\.5\]"),
     ("p", 0.0, r"\(0, inf\]"), ("mu", -0.1, r"\[0, 2\]"), ("mu", 7.0, r"\[0, 2\]")])
 def test_a_value_outside_its_physical_range_is_named_with_its_row(tmp_path, column, value, allowed):
-    path = write_run(tmp_path / "preshear.csv")
-    df = pd.read_csv(path)
-    df.loc[11, column] = value
-    df.to_csv(path, index=False)
+    path = edited_run(tmp_path / "preshear.csv", column, value, row=11)
     with pytest.raises(DEMInputError, match=rf"preshear\.csv: column '{column}' = {value:g} at data row 12 is "
                                             rf"outside its physical range {allowed}"):
         read_series(path)
@@ -138,23 +145,17 @@ def test_a_value_outside_its_physical_range_is_named_with_its_row(tmp_path, colu
 
 def test_read_series_refuses_a_mu_that_is_not_sigma_xy_over_p_naming_the_row(tmp_path):
     """mu twice |sigma_xy|/p (issue 33's factor 2) in one row: refused with the file, the column and the row."""
-    path = write_run(tmp_path / "preshear.csv")
-    df = pd.read_csv(path)
-    df.loc[11, "mu"] *= 2
-    df.to_csv(path, index=False)
+    path = edited_run(tmp_path / "preshear.csv", "mu", lambda mu: 2 * mu, row=11)
     with pytest.raises(DEMInputError, match=r"preshear\.csv: column 'mu' = 0\.4\d* at data row 12 but "
-                                            r"\|sigma_xy\|/p = 0\.2\d* there \(1 row\(s\) differ"):
+                                            r"\|sigma_xy\|/p = 0\.2\d* there \(1 row\(s\) in all\)"):
         read_series(path)
 
 
 def test_read_series_refuses_stresses_in_pascal_with_a_hint_about_si_units(tmp_path):
     """sigma_xy and p times 1e5 (Pa at the campaigns' pressure): mu still agrees, the scale does not."""
-    path = write_run(tmp_path / "preshear.csv")
-    df = pd.read_csv(path)
-    df[["sigma_xy", "p"]] *= 1e5
-    df.to_csv(path, index=False)
-    with pytest.raises(DEMInputError, match=r"preshear\.csv: column 'sigma_xy' = 20000 at data row 1 \(60 row\(s\) "
-                                            r"in all\) is not of order 1: .* looks like SI \(Pa\): divide the "
+    path = edited_run(tmp_path / "preshear.csv", ["sigma_xy", "p"], lambda v: 1e5 * v)
+    with pytest.raises(DEMInputError, match=r"preshear\.csv: column 'sigma_xy' = 20000 at data row 1 is not of order "
+                                            r"1 \(60 row\(s\) in all\): .* looks like SI \(Pa\): divide the "
                                             r"stresses by the imposed pressure"):
         read_series(path)
 

@@ -260,7 +260,7 @@ def in_pascal(run):
     (flip("A_xy"), r"seed1_heaviside\.csv: run heaviside of seed 1: column 'A_xy' has the wrong sign in the "
                    r"pre-shear's steady window \(data rows \d+-\d+, rate > 0\)"),
     (double_mu, r"seed1_heaviside\.csv: column 'mu' = [\d.]+ at data row \d+ but \|sigma_xy\|/p = [\d.]+ there"),
-    (in_pascal, r"seed1_heaviside\.csv: column 'sigma_xy' = .* is not of order 1: .* looks like SI \(Pa\)"),
+    (in_pascal, r"seed1_heaviside\.csv: column 'sigma_xy' = .* is not of order 1 .* looks like SI \(Pa\)"),
 ], ids=["sigma_xy sign-flipped", "A_xy sign-flipped", "mu twice |sigma_xy|/p", "stresses in Pa"])
 def test_import_refuses_a_run_that_breaks_the_contract_naming_the_input_file_and_writes_nothing(tmp_path, edit, words):
     """Issue 33's four silent acceptances, each in one of two runs of one seed: the good import passes, the edited
