@@ -22,7 +22,7 @@ import pandas as pd
 import pytest
 import yaml
 
-from dem_contract import DEMInputError, read_series, release, synthetic
+from dem_contract import DEMInputError, published, read_series, release, synthetic
 from dem_contract.importer import import_cases
 from model import default_params
 from tests.helpers import counts, dry_run, snakemake
@@ -330,19 +330,21 @@ def test_the_deciding_preset_takes_every_case_from_its_release(workflow_dir, tmp
 
 @pytest.mark.slow
 @pytest.mark.skipif(not (DECIDE.is_dir() and RUN_RELEASE_CLAIMS),
-                    reason="opt-in: RUN_RELEASE_CLAIMS=1 (calibrates the deciding campaign from its release, minutes)")
-def test_the_deciding_campaign_recomputed_from_its_release_gives_its_published_claims(workflow_dir, tmp_path):
+                    reason="opt-in: RUN_RELEASE_CLAIMS=1 (calibrates the deciding campaign from its release, minutes; "
+                           ".ci/run runs it)")
+def test_the_deciding_campaign_recomputed_from_its_release_gives_its_published_tables(workflow_dir, tmp_path):
     """26.4a on the committed release: calibration, comparison and claims from data/bulk-decide alone (no YADE)
-    write the claims table and the reversal-design table the campaign published, byte for byte."""
+    give every table in its published/ (claims, reversal design, power, plan, parameters): every published row,
+    the verdicts and counts exactly, the numbers to dem_contract.published.RTOL (its docstring says why)."""
     from tests.helpers import snakemake as snakemake_in
     results = tmp_path / "results"
-    run = snakemake_in("-j2", results / "claims" / "paper_claims.csv", "--configfile", "config/bulk_decide.yaml",
-                       "--config", f"results_dir={results}", "allow_outside_tree=True", cwd=workflow_dir,
-                       timeout=None)
+    targets = list(published.published_tables(DECIDE, results).values())
+    assert {p.name for p in targets} >= {"paper_claims.csv", "params_table.csv"}
+    run = snakemake_in("-j2", *targets, "--configfile", "config/bulk_decide.yaml", "--config",
+                       f"results_dir={results}", "allow_outside_tree=True", cwd=workflow_dir, timeout=None)
     assert run.returncode == 0, run.stderr[-3000:]
     assert not any(f"rule {r}:" in run.stderr + run.stdout for r in DEM_RULES)
-    for name in ("paper_claims.csv", "reversal_design.csv"):
-        assert filecmp.cmp(results / "claims" / name, DECIDE / "published" / name, shallow=False), name
+    assert published.compare(DECIDE, results) == []
 
 
 def test_a_release_remade_in_place_is_not_called_dirty_for_its_own_deleted_folder(tmp_path):
