@@ -4,6 +4,9 @@ SHELL := /bin/bash
 VENV  := .venv
 PY    := $(VENV)/bin/python
 STAMP := $(VENV)/.installed
+# Each entry point checks its preset first: the pre-flight names a missing or malformed config
+# file with its line (Snakemake's own message has none), then every bad value, before any job.
+PREFLIGHT := $(PY) -m preflight check
 
 .PHONY: setup yade venv quick paper bench test test-all slurm-test lint clean
 
@@ -25,11 +28,13 @@ $(STAMP): requirements.txt
 
 # The quick campaign: every figure and table of the study in results/ (its time: README, "The presets and what each costs").
 quick: setup
+	$(PREFLIGHT) config/quick.yaml
 	$(VENV)/bin/snakemake -j2 --configfile config/quick.yaml
 	$(VENV)/bin/snakemake --configfile config/quick.yaml --report results/report.html
 
 # The paper's campaign (hours on 2 cores).
 paper: setup
+	$(PREFLIGHT) config/config.yaml
 	$(VENV)/bin/snakemake -j2
 	$(VENV)/bin/snakemake --report results/report.html
 
@@ -40,6 +45,7 @@ paper: setup
 # quick campaign's DEM and calibration run first where results/ lacks them.
 BENCH := results/accuracy/batched_cost.csv results/accuracy/calibration_cost.csv results/accuracy/stage_overhead.csv
 bench: setup
+	$(PREFLIGHT) config/quick.yaml
 	$(VENV)/bin/snakemake -j2 $(BENCH) --configfile config/quick.yaml
 
 # The suite on both cores (pytest-xdist, one test file per worker so that a module's fixture
@@ -47,6 +53,7 @@ bench: setup
 # marked heavy (end-to-end tiny studies and releases, coverage studies) run in test-all.
 # On one core, without xdist: $(PY) -m pytest -q -p no:xdist
 test: setup
+	$(PREFLIGHT) config/ci.yaml
 	$(VENV)/bin/lint-imports --no-cache
 	$(PY) -m pytest -q -n 2 --dist loadfile -m "not serial and not heavy"
 	$(PY) -m pytest -q -p no:xdist -m "serial and not heavy"

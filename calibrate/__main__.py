@@ -1,14 +1,16 @@
 """Command line: ``python -m calibrate --dem <case_dir> [...] --out results/calibration [options]``.
 
 Exit status 2 with a one-line message naming the file and the problem for bad
-DEM input (``DEMInputError``) or bad options.
+DEM input (``DEMInputError``) or bad options; the ``--out`` folders this call
+created are removed then (a refused calibration leaves no empty or half-written folder).
 """
 from __future__ import annotations
 
 import argparse
 import re
 import sys
-from pathlib import Path
+
+from dem_contract.folders import new_folders, remove_new
 
 from . import backsolve, freeform, io, profiles, route2, smoothing
 from .pipeline import Settings, run
@@ -115,8 +117,9 @@ def main(argv=None) -> int:
         print(f"calibrate: --profile-points {a.profile_points} / --profile-evals {a.profile_evals}: expected "
               f"0 (no profiles) or >= 2 points and >= 1 evaluation", file=sys.stderr)
         return 2
+    created, done = [], False
     try:
-        Path(a.out).mkdir(parents=True, exist_ok=True)  # before any work: a bad --out fails at once
+        created = new_folders(a.out)  # before any work: a bad --out fails at once
         settings = Settings(
             protocols=tuple(a.protocols),
             smoothing=smoothing.SmoothingSettings(fine_window=a.sg_fine_window, coarse_window=a.sg_coarse_window,
@@ -132,6 +135,7 @@ def main(argv=None) -> int:
             profile=profiles.ProfileSettings(n_points=a.profile_points, evals=a.profile_evals))
         run(a.dem, a.out, settings, log=lambda m: print(m, file=sys.stderr, flush=True),
             argv=["python -m calibrate", *argv])
+        done = True
     except io.DEMInputError as exc:
         print(f"calibrate: bad DEM input: {exc}", file=sys.stderr)
         return 2
@@ -141,6 +145,9 @@ def main(argv=None) -> int:
     except OSError as exc:  # an --out that cannot be written (a file in its path, no permission, disk full)
         print(f"calibrate: cannot write {exc.filename or a.out}: {exc.strerror or exc}", file=sys.stderr)
         return 2
+    finally:
+        if not done:
+            remove_new(created)
     return 0
 
 

@@ -5,9 +5,12 @@ docs/own-dem-data.md) into the contract's layout (docs/data-contract.md) and
 reads them back through the contract's reader. ``release`` writes a finished
 campaign's DEM cases as a data release (docs/data-release.md), ``verify``
 checks a release's checksums and reads every case back, ``restore`` writes one
-released case into a results folder as a finished case. Bad input exits with
-status 2 and a message naming the file (and key or row); a release that fails
-``verify`` exits with status 1.
+released case into a results folder as a finished case (after the checksums).
+``published`` compares a recomputation from a release with the tables the
+release published, ``republish`` replaces those tables by a recomputation's.
+Bad input exits with status 2 and a message naming the file (and key or row);
+a release that fails ``verify``, or a recomputation that differs from the
+published tables, exits with status 1.
 """
 from __future__ import annotations
 
@@ -16,7 +19,7 @@ import shlex
 import sys
 from pathlib import Path
 
-from . import release
+from . import published, release
 from .importer import import_cases, summary
 from .series import DEMInputError
 
@@ -44,6 +47,13 @@ def build_parser() -> argparse.ArgumentParser:
     res.add_argument("--release", required=True, help="the release folder")
     res.add_argument("--case", required=True, help="the case's label")
     res.add_argument("--out", required=True, help="the case folder to write, e.g. results/dem/<case>")
+    pub = sub.add_parser("published", help="a recomputation from a release against the tables it published")
+    pub.add_argument("--release", required=True, help="the release folder, e.g. data/bulk-decide")
+    pub.add_argument("--results", required=True, help="the results folder of the recomputation")
+    rep = sub.add_parser("republish", help="replace a release's published tables by a recomputation's")
+    rep.add_argument("--release", required=True, help="the release folder, e.g. data/bulk-decide")
+    rep.add_argument("--results", required=True, help="the results folder of the recomputation")
+    rep.add_argument("--reason", required=True, help="why the tables changed (kept in the manifest)")
     return ap
 
 
@@ -75,6 +85,20 @@ def run(args) -> int:
             for problem in problems:
                 print(f"  {problem}")
         return 1 if bad else 0
+    elif args.command == "published":
+        problems = published.compare(args.release, args.results)
+        print(f"dem_contract published: {args.results} against {args.release}/published: "
+              + ("agree" if not problems else f"{len(problems)} difference(s)")
+              + f" (verdicts and counts exactly, numbers to a relative {published.RTOL:g})")
+        for problem in problems:
+            print(f"  {problem}")
+        return 1 if problems else 0
+    elif args.command == "republish":
+        command = "python -m dem_contract " + shlex.join(sys.argv[1:]) if sys.argv[1:2] == ["republish"] else \
+            f"python -m dem_contract republish --release {args.release} --results {args.results}"
+        tables = published.republish(args.release, args.results, command, args.reason)
+        print(f"dem_contract republish: {', '.join(p.name for p in tables)} in {args.release}/published, "
+              f"from {args.results}")
     else:
         out = release.restore_case(args.release, args.case, args.out)
         print(f"dem_contract restore: {args.case} from {args.release} -> {out}")

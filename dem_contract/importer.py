@@ -26,6 +26,11 @@ Conventions of the minimal CSV (the contract's units, dimensionless):
   shears towards +x.
 - A start from rest (a first row at t = 0 with ``gammadot`` = 0) is kept: the
   reader accepts the step of the wall speed from 0.
+- What the contract implies is checked on the input, each refusal naming the
+  input file: a given ``mu`` is |sigma_xy|/p and the stresses are of order p
+  (``series.check_stresses``); in the pre-shear's steady window sigma_xy has
+  the rate's sign and A_xy the opposite one (``steady_signs``). Nothing is
+  written under ``out`` unless every case is (``folders.staged``).
 - Missing optional columns are derived where the contract defines them
   (``mu = |sigma_xy|/p``; ``inertial_number = |gammadot|/sqrt(p)``, the
   contract's definition in these units; ``U_top = -U_bottom = gammadot gap/2``
@@ -42,8 +47,10 @@ import pandas as pd
 import yaml
 
 from .derived import mirror_reversal, reversal_kinds, split_transients
+from .folders import staged
 from .labels import case_label
-from .series import CONTRACT_COLUMNS, DEMInputError, read_series
+from .series import CONTRACT_COLUMNS, DEMInputError, check_stresses, read_series
+from .steady_signs import check_steady_signs
 
 #: Columns every minimal CSV must carry (calibration, comparison and claims read them).
 MINIMAL_COLUMNS = ("t", "strain", "gammadot", "A_xx", "A_xy", "sigma_xy", "p")
@@ -150,7 +157,8 @@ def read_minimal(path, cell=None) -> pd.DataFrame:
     ------
     DEMInputError
         Naming the file: missing file or required column, a non-finite value in a
-        required column (with its row), and everything ``read_series`` refuses.
+        required column (with its row), a given ``mu`` that is not |sigma_xy|/p or a
+        bulk stress not of order p (``check_stresses``), and everything ``read_series`` refuses.
     """
     path = Path(path)
     data = read_series(path, columns=MINIMAL_COLUMNS, min_samples=10, what="a run of the metadata's cases")
@@ -168,6 +176,7 @@ def read_minimal(path, cell=None) -> pd.DataFrame:
     if "U_top" not in raw and "U_bottom" not in raw:
         out["U_top"] = 0.5 * out["gammadot"] * out["gap"]
         out["U_bottom"] = -out["U_top"]
+    check_stresses(path, out)
     return out[list(CONTRACT_COLUMNS)]
 
 
@@ -222,25 +231,28 @@ def import_cases(meta_path, out) -> list:
     Returns
     -------
     list of Path
-        The case folders written.
+        The case folders written (each replaces a folder of the same label in ``out``).
 
     Raises
     ------
     DEMInputError
-        Bad metadata (naming the key), a bad run file (naming the file and row), or
-        written files the contract's reader refuses.
+        Bad metadata (naming the key), a bad run file (naming the file, and the
+        column, run and rows it breaks), or written files the contract's reader
+        refuses. Nothing is written under ``out`` then: the cases are written
+        beside it (``folders.staged``) and moved in once every one is read back.
     """
     meta = load_metadata(meta_path)
     out = Path(out)
-    written = []
-    for case in meta["cases"]:
-        label = case_label(meta["pressure"], meta["inertial_number"], case["seed"])
-        case_dir = out / label
-        case_dir.mkdir(parents=True, exist_ok=True)
-        _write_case(meta, case, case_dir)
-        _validate(case_dir, [r["protocol"] for r in case["runs"]])
-        written.append(case_dir)
-    return written
+    labels = []
+    with staged(out) as tmp:
+        for case in meta["cases"]:
+            label = case_label(meta["pressure"], meta["inertial_number"], case["seed"])
+            case_dir = tmp / label
+            case_dir.mkdir()
+            _write_case(meta, case, case_dir)
+            _validate(case_dir, [r["protocol"] for r in case["runs"]])
+            labels.append(label)
+    return [out / label for label in labels]
 
 
 def _write_case(meta, case, case_dir):
@@ -261,6 +273,7 @@ def _write_case(meta, case, case_dir):
         revs = run["reversals"]
         targets = [{**r, "strain": -float(r["strain"]) if mirrored else float(r["strain"])} for r in revs]
         rows = reversal_rows(data, targets, src)
+        check_steady_signs(data.iloc[: rows[0] + 1], f"{src}: run {run['protocol']} of seed {case['seed']}")
         start = rows[0]     # the run's file holds its rows after this one
         if j == 0:
             pre = data.iloc[: rows[0] + 1]

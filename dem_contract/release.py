@@ -19,7 +19,9 @@ and ``config.yaml`` (the campaign's config file as run; ``config-<k>.yaml``,
 k = 1, 2, ..., when it ran with several, in their order) and ``manifest.yaml``
 (the config, merged as Snakemake merges it, the commit of the code, YADE's version, the date, a sha256 and a size
 per file, the commands that regenerate the DEM and the release). Nothing in a
-release is edited by hand: ``verify`` refuses a file whose checksum differs.
+release is edited by hand: ``verify`` reports a file whose checksum differs, and
+``restore_case`` and ``released_cases`` (what the workflow's release rules use)
+refuse the whole release before writing anything.
 """
 from __future__ import annotations
 
@@ -316,19 +318,46 @@ def checksum_problems(release) -> list:
     return problems
 
 
-def restore_case(release, label, out) -> Path:
-    """Write a released case into ``out`` (``<results>/dem/<label>/``) as a finished DEM case.
+def require_intact(release) -> Path:
+    """The release folder, once every file's sha256 and size are those of its manifest.
 
-    The series go through the importer (``import_cases``: the contract's checked
-    reader and its reversal splitter), then the DEM's own sidecars replace the
-    importer's, so every stage reads the costs, disks and scene as the DEM wrote them.
+    A release is used (restored, or named by a preset's ``release:``) only as it
+    was released: an edited, missing or added file stops its use before anything
+    is written (``checksum_problems`` names each).
 
     Raises
     ------
     DEMInputError
-        An unknown case, a file the contract refuses, or a released sidecar whose
-        reversal time disagrees with the series.
+        Naming every file that differs from the manifest.
     """
+    problems = checksum_problems(release)
+    if problems:
+        raise DEMInputError(f"{release}: {len(problems)} file(s) differ from the manifest; a release is used only "
+                            "as released (restore it from git, or remake it: docs/data-release.md):\n  "
+                            + "\n  ".join(problems))
+    return Path(release)
+
+
+def restore_case(release, label, out) -> Path:
+    """Write a released case into ``out`` (``<results>/dem/<label>/``) as a finished DEM case.
+
+    Every file of the release is checked against its manifest first
+    (``require_intact``); nothing is written unless all match. The series then go
+    through the importer (``import_cases``: the contract's checked reader and its
+    reversal splitter), then the DEM's own sidecars replace the importer's, so
+    every stage reads the costs, disks and scene as the DEM wrote them.
+
+    Raises
+    ------
+    DEMInputError
+        A file that differs from the manifest, an unknown case, a file the contract
+        refuses, or a released sidecar whose reversal time disagrees with the series.
+    """
+    return _restore_checked_case(require_intact(release), label, out)
+
+
+def _restore_checked_case(release, label, out) -> Path:
+    """``restore_case`` after the checksums (``verify`` reports them itself, then reads every case back)."""
     release, out = Path(release), Path(out)
     src = release / CASES_DIR / label
     if not (src / "case.yaml").is_file():
@@ -356,7 +385,7 @@ def verify(release) -> list:
     for label in read_manifest(release)["cases"]:
         with tempfile.TemporaryDirectory(prefix="verify-") as tmp:
             try:
-                restore_case(release, label, Path(tmp) / label)
+                _restore_checked_case(release, label, Path(tmp) / label)
             except DEMInputError as exc:
                 problems.append(str(exc))
     return problems
@@ -366,12 +395,14 @@ def released_cases(releases, protocols=(), base=".") -> dict:
     """Case label -> release folder, over the releases named (a folder or a list), for cases holding ``protocols``.
 
     A case released without one of ``protocols`` is left out: its DEM runs as usual.
+    Each release is checked against its manifest first (``require_intact``), so
+    a workflow naming an edited release stops while it is parsed, naming the file.
     """
     if isinstance(releases, (str, Path)):
         releases = [releases]
     found = {}
     for release in releases or []:
-        release = Path(base) / release
+        release = require_intact(Path(base) / release)
         for label, case in read_manifest(release)["cases"].items():
             if set(protocols) <= set(case["protocols"]):
                 found.setdefault(label, str(release))
@@ -389,4 +420,4 @@ def case_files(release, label) -> list:
 
 
 __all__ = ["DEMInputError", "MANIFEST", "sha256", "write_csv_gz", "case_protocols", "make_release", "read_manifest",
-           "checksum_problems", "restore_case", "verify", "released_cases", "release_bytes", "case_files"]
+           "checksum_problems", "require_intact", "restore_case", "verify", "released_cases", "release_bytes", "case_files"]

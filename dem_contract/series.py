@@ -76,7 +76,8 @@ def read_series(path, columns=CONTRACT_COLUMNS, min_samples: int = 2, what: str 
         ``finite`` column (named with its first data row); fewer than
         ``min_samples`` rows; ``t`` not strictly increasing; a value outside
         its physical range (``BOUNDS``: |A_xx|, |A_xy| <= 1/2, p > 0,
-        0 <= mu <= ``MU_MAX``); strain and t inconsistent with the integral of
+        0 <= mu <= ``MU_MAX``); a stress not of order p or mu not
+        |sigma_xy|/p (``check_stresses``); strain and t inconsistent with the integral of
         gammadot (a jump; when ``strain`` and ``gammadot`` are read); a gap
         in the sampling grid (``_check_sampling_grid``: rows missing). Every
         message names the file and the data row (counted from 1 after the header).
@@ -111,6 +112,7 @@ def read_series(path, columns=CONTRACT_COLUMNS, min_samples: int = 2, what: str 
     if np.any(dt <= 0):
         raise DEMInputError(f"{path}: column 't' does not increase strictly (data row {int(np.argmax(dt <= 0)) + 2})")
     _check_bounds(path, data)
+    check_stresses(path, data)
     if {"strain", "gammadot"} <= set(columns):
         _check_strain_integral(path, data)
     _check_sampling_grid(path, data)
@@ -189,11 +191,70 @@ def _check_bounds(path: Path, data: pd.DataFrame) -> None:
         v = pd.to_numeric(data[col], errors="coerce").to_numpy(dtype=float)
         with np.errstate(invalid="ignore"):
             bad = np.isfinite(v) & ((v <= low if low_open else v < low) | (v > high))
-        if bad.any():
-            k = int(np.argmax(bad))
-            allowed = f"{'(' if low_open else '['}{low:g}, {high:g}]"
-            raise DEMInputError(f"{path}: column '{col}' = {v[k]:.6g} at data row {k + 1} is outside its "
-                                f"physical range {allowed} ({int(bad.sum())} row(s) in all)")
+        allowed = f"{'(' if low_open else '['}{low:g}, {high:g}]"
+        _refuse_rows(path, col, v, bad, lambda k: f"is outside its physical range {allowed}")
+
+
+def _refuse_rows(path, col: str, values: np.ndarray, bad: np.ndarray, says, hint: str = "") -> None:
+    """Raise ``DEMInputError`` at the first row where ``bad`` holds: the file, the column, its value there,
+    the data row (from 1), ``says(row index)``, the number of such rows, then ``hint``."""
+    if bad.any():
+        k = int(np.argmax(bad))
+        raise DEMInputError(f"{path}: column '{col}' = {values[k]:.6g} at data row {k + 1} {says(k)} "
+                            f"({int(bad.sum())} row(s) in all){hint}")
+
+
+#: Stresses are in units of the imposed pressure p: every released run stays within 0.14-2.6 (p, p_bulk)
+#: and 0.72 (|sigma_xy|, |sigma_xy_bulk|), reversal transients included. A stress above STRESS_MAX p is
+#: taken for a unit slip: a granular layer's pressure in Pa is 1e3 or more (the campaigns' 1e5).
+STRESS_MAX = 100.0
+STRESS_COLUMNS = ("sigma_xy", "p", "sigma_xy_bulk", "p_bulk")
+#: mu = |sigma_xy|/p row by row (the DEM computes it so: equal to the bit in every released run).
+#: MU_TOL, a quarter of one sample's scatter in mu (0.04, docs/data-contract.md), leaves room for
+#: a simulator's rounding and catches any scale slip (a factor 2 on a steady mu of 0.27 is 0.27).
+MU_TOL = 0.01
+
+
+def check_stresses(path, data: pd.DataFrame) -> None:
+    r"""The stresses are of order p, and mu is :math:`|\sigma_{xy}|/p` where both are given.
+
+    Over the finite values of the columns ``data`` holds: :math:`|v| \le` ``STRESS_MAX``
+    for each of ``STRESS_COLUMNS``; :math:`|\mu - |\sigma_{xy}|/p| \le` ``MU_TOL`` in every
+    row with a non-zero rate (where the walls stand still the direction of shear is
+    undefined, and a model-made series gives the friction of its fabric there:
+    ``dem_contract.synthetic``).
+
+    Parameters
+    ----------
+    path : str or Path
+        The file the rows come from (named in the message).
+    data : pandas.DataFrame
+
+    Raises
+    ------
+    DEMInputError
+        Naming the file, the column, the first offending data row (counted from 1)
+        and how many rows offend; for a stress too large, with the hint that it
+        looks like SI units.
+    """
+    for col in (c for c in STRESS_COLUMNS if c in data.columns):
+        v = pd.to_numeric(data[col], errors="coerce").to_numpy(dtype=float)
+        with np.errstate(invalid="ignore"):
+            bad = np.abs(v) > STRESS_MAX
+        _refuse_rows(path, col, v, bad, lambda k: "is not of order 1",
+                     f": stresses are in units of the imposed pressure p (docs/data-contract.md), at most "
+                     f"{STRESS_MAX:g}; a value like this looks like SI (Pa): divide the stresses by the imposed pressure")
+    if not {"mu", "sigma_xy", "p"} <= set(data.columns):
+        return
+    mu, sxy, p = (pd.to_numeric(data[c], errors="coerce").to_numpy(dtype=float) for c in ("mu", "sigma_xy", "p"))
+    moving = np.ones(len(mu), dtype=bool) if "gammadot" not in data.columns else \
+        pd.to_numeric(data["gammadot"], errors="coerce").to_numpy(dtype=float) != 0.0
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ratio = np.abs(sxy) / p
+        bad = moving & np.isfinite(mu) & np.isfinite(ratio) & (np.abs(mu - ratio) > MU_TOL)
+    _refuse_rows(path, "mu", mu, bad, lambda k: f"but |sigma_xy|/p = {ratio[k]:.6g} there",
+                 f": mu is |sigma_xy|/p of its row within {MU_TOL:g} (docs/data-contract.md); leave mu out to have "
+                 f"it derived")
 
 
 def _check_strain_integral(path: Path, data: pd.DataFrame) -> None:

@@ -3,17 +3,23 @@
 Format (YAML, one document; every block required unless marked optional)::
 
     format: fabric-friction-params      # fixed tag
-    version: 1
+    version: 2                          # 1: read as well (files written before the end line)
     friction_eq2:       {X0: 0.028, k1: 2.7, k3: 20.0, k5: 90000.0}   # Eq. 2
     friction_quadratic: {m0: 0.0, m1: -3.3, m2: 0.0}                  # law of [15]
     model1: {a1: ..., b1: ..., c1: ..., a2: ..., b2: ..., c2: ..., X_c: 0.0827}  # Eq. 6
     model2: {c1: ..., c2: ..., c3: ...}                               # Eq. 5
     intervals:    # optional: {block: {name: [low, high]}} (e.g. bootstrap 95 %)
     provenance:   # optional, free-form: cases, seeds, settings, date
+    ...           # version 2: YAML's document end, the file's last line
 
 Every value is dimensionless. ``load_params`` rejects a missing block, a
 missing or unknown key, or a value outside ``RANGES`` with a ``ValueError``
-that names the key and its allowed range.
+that names the key and its allowed range, and a version-2 file whose last
+line is not the document end ``...``: a file cut short (a copy or a write
+interrupted) still parses as YAML and may hold every required block, with a
+value cut (``c3: -33.`` for ``-33.7``) and the intervals and provenance lost.
+``save_params`` (the calibration's writer) writes version 2. Version 1
+(no end line) is read as before: files written before version 2, and hand-written ones.
 """
 from __future__ import annotations
 
@@ -25,7 +31,13 @@ from pathlib import Path
 import yaml
 
 FORMAT_TAG = "fabric-friction-params"
-FORMAT_VERSION = 1
+#: The version ``save_params`` writes; ``READ_VERSIONS`` are read.
+FORMAT_VERSION = 2
+READ_VERSIONS = (1, 2)
+#: A version-2 file's last line: YAML's document end (``yaml.safe_dump(..., explicit_end=True)``).
+DOCUMENT_END = "..."
+#: The top-level blocks ``save_params`` writes, in order (intervals and provenance when not empty).
+WRITTEN_BLOCKS = ("friction_eq2", "friction_quadratic", "model1", "model2", "intervals", "provenance")
 
 # Allowed open ranges (low, high) per block and key. Wide on purpose: they
 # catch typos and sign slips, not physics (the calibration decides that).
@@ -143,11 +155,11 @@ def params_from_dict(data: dict, source: str = "parameters") -> ModelParams:
         raise ValueError(f"{source}: 'format' must be '{FORMAT_TAG}', got {data.get('format')!r}")
     version = data.get("version", FORMAT_VERSION)
     try:
-        known = not isinstance(version, bool) and float(version) == FORMAT_VERSION
+        known = not isinstance(version, bool) and float(version) in READ_VERSIONS
     except (TypeError, ValueError):
         known = False
     if not known:
-        raise ValueError(f"{source}: 'version' must be {FORMAT_VERSION}, got {version!r}")
+        raise ValueError(f"{source}: 'version' must be one of {list(READ_VERSIONS)}, got {version!r}")
     allowed = set(BLOCKS) | {"format", "version", "intervals", "provenance"}
     unknown = set(data) - allowed
     if unknown:
@@ -175,14 +187,21 @@ def read_yaml(path, what: str = "file"):
         ``problem_mark``, counted from 1).
     """
     path = Path(path)
+    return _parse_yaml(_read_text(path, what), path, what)
+
+
+def _read_text(path: Path, what: str) -> str:
     if not path.exists():
         raise ValueError(f"{path}: {what} not found")
     if path.is_dir():
         raise ValueError(f"{path}: is a directory, expected a {what} (YAML)")
     try:
-        text = path.read_text()
+        return path.read_text()
     except (OSError, UnicodeDecodeError) as exc:
         raise ValueError(f"{path}: cannot read the {what} ({exc})") from None
+
+
+def _parse_yaml(text: str, path: Path, what: str):
     try:
         return yaml.safe_load(text)
     except yaml.YAMLError as exc:
@@ -200,8 +219,33 @@ def load_params(path) -> ModelParams:
     ValueError
         Naming the file (and the line, for malformed YAML, or the key).
     """
-    data = read_yaml(path, what="parameter file")
+    path = Path(path)
+    text = _read_text(path, "parameter file")
+    data = _parse_yaml(text, path, "parameter file")
+    check_complete(text, data, path)
     return params_from_dict(data, source=str(path))
+
+
+def check_complete(text: str, data, path) -> None:
+    """A version-2 parameter file ends with its document end line ``...`` (``DOCUMENT_END``).
+
+    Raises
+    ------
+    ValueError
+        Naming the file, where it ends and the blocks of ``WRITTEN_BLOCKS`` it
+        lacks: the file was cut short.
+    """
+    if not isinstance(data, dict) or data.get("version") != FORMAT_VERSION:
+        return
+    lines = text.rstrip().splitlines()
+    if lines and lines[-1] == DOCUMENT_END:
+        return
+    absent = [b for b in WRITTEN_BLOCKS if b not in data]
+    raise ValueError(f"{path}: cut short: a version-{FORMAT_VERSION} parameter file ends with the line "
+                     f"'{DOCUMENT_END}', this one at byte {len(text.encode())} after line {len(lines)} "
+                     f"{(lines[-1] if lines else '')!r}; what followed is missing"
+                     + (f" (absent blocks: {', '.join(absent)})" if absent else "")
+                     + "; rerun the calibration or restore the file")
 
 
 def save_params(params: ModelParams, path) -> None:
@@ -209,7 +253,7 @@ def save_params(params: ModelParams, path) -> None:
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     with path.open("w") as fh:
-        yaml.safe_dump(params.to_dict(), fh, sort_keys=False)
+        yaml.safe_dump(params.to_dict(), fh, sort_keys=False, explicit_end=True)
 
 
 # Documented defaults: Eq. 2 is our reading of the paper (docs/model.md); the rest is a plausible

@@ -9,8 +9,9 @@ It holds what the schema (``workflow/schemas/config.schema.yaml``) cannot say:
 non-finite numbers, keys that must agree with each other (sampling intervals,
 bulk band and gap, a protocol's strains), case labels that two values would
 share, calibration sets and the sensitivity set naming what the campaign does
-not have, extra calibrate / compare options their parsers refuse, the results
-folder, and duplicated keys in the config file's text (``configfile``: a YAML
+not have, extra calibrate / compare options their parsers refuse or the
+workflow passes itself (``options``), where the results folder and the releases lie
+(``paths``), and duplicated keys in the config file's text (``configfile``: a YAML
 loader otherwise lets the last one win). Last, every scene the
 campaign would write is checked by yade_scripts' own validator, so nothing the
 DEM would refuse reaches its first job.
@@ -24,6 +25,7 @@ import math
 import re
 from pathlib import Path
 
+from campaign import stage_options
 from campaign.calibration_sets import calibration_sets, same_value
 from campaign.cases import cases, rates
 from campaign.configfile import ConfigProblem, configfile_problems, load_configfile  # noqa: F401 (re-exported)
@@ -31,6 +33,11 @@ from campaign.scene_spec import inertial_number_range, protocol_strain, scene_de
 from campaign.schema_defaults import SCHEMA, schema as read_schema
 from campaign.scenes import scene_from_config
 from dem_contract.labels import case_label, format_number
+
+from .options import options_problems
+from .paths import release_problems, results_dir_problems
+from .problems import problem
+from .problems import value_text as _v
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -41,20 +48,6 @@ QUASI_STATIC_MAX_I = 1.0e-2
 PERIODIC_MAX_W_OVER_H = 1.1
 #: Calibration set names are path parts and Snakemake wildcards (workflow/rules/common.smk).
 SET_NAME = re.compile(r"^[A-Za-z0-9.-]+(_[A-Za-z0-9.-]+)*$")
-#: Top-level folders of the repository that hold code or inputs: never a results folder.
-SOURCE_FOLDERS = {"campaign", "calibrate", "claims", "compare", "config", "dem_contract", "dem_study", "docs", "model",
-                  "preflight", "profiles", "shared_stats", "tests", "tools", "workflow", "yade_scripts", "data",
-                  ".git", ".snakemake"}
-
-
-def _v(x) -> str:
-    return format_number(x) if isinstance(x, float) else repr(x) if isinstance(x, str) else str(x)
-
-
-def problem(key: str, value, why: str, allowed: str | None = None, shown: str | None = None) -> str:
-    """One line: ``config error: key = value: why (allowed: ...)``; ``shown`` replaces the value's text."""
-    text = f"config error: {key} = {_v(value) if shown is None else shown}: {why}"
-    return text + (f" (allowed: {allowed})" if allowed else "")
 
 
 # --- values the schema cannot see ------------------------------------------------
@@ -91,7 +84,10 @@ def schema_problems(config: dict, schema_path=SCHEMA) -> list[str]:
                 float(error.instance)
                 hint = " (YAML reads a number like 1.0e5 as text: write 1.0e+5)"
             except ValueError:
-                pass
+                if error.instance.lower() in ("true", "false") and "boolean" in error.validator_value:
+                    hint = f" (snakemake --config reads {error.instance} as text: write {error.instance.title()})"
+        if error.validator == "pattern" and "title" in error.schema:   # the pattern in words
+            hint = f" (allowed: {error.schema['title']})"
         out.append(f"config error: {key or '<top level>'}: {error.message}{hint}")
     return out
 
@@ -141,9 +137,15 @@ def loading_problems(config: dict) -> list[str]:
 
 
 def cell_problems(config: dict) -> list[str]:
-    """Sampling intervals in order, a bulk band inside the gap, a width for 3 disks, a packing that can compress."""
+    """Sampling intervals in order, a bulk band inside the gap, a width for 3 disks, a packing that can compress,
+    disks of more than one size."""
     out = []
     s, cell, mat, pack = config["sampling"], config["cell"], config["material"], config.get("pack") or {}
+    if mat["size_ratio_min"] >= mat["size_ratio_max"]:   # the schema allows 1 and 1 (min <= 1 <= max)
+        out.append(problem("material.size_ratio_min", mat["size_ratio_min"],
+                           f"equals material.size_ratio_max = {_v(mat['size_ratio_max'])}: disks of one size pack "
+                           "in 2D into a crystal (hexagonal order), not the disordered packing the model and the "
+                           "paper are about", "size_ratio_min < size_ratio_max (paper: 0.5 and 1.5)"))
     if s["fine_interval"] > s["coarse_interval"]:
         out.append(problem("sampling.fine_interval", s["fine_interval"],
                            f"is above sampling.coarse_interval = {_v(s['coarse_interval'])}",
@@ -254,17 +256,10 @@ def calibrate_min_samples(config: dict, root=ROOT) -> int:
     calibrate costs seconds at every Snakemake start).
     """
     import ast
-    import shlex
 
-    argv = shlex.split((config.get("calibration") or {}).get("options", "") or "")
-    for i, arg in enumerate(argv):
-        value = arg.split("=", 1)[1] if arg.startswith("--min-samples=") else (
-            argv[i + 1] if arg == "--min-samples" and i + 1 < len(argv) else None)
-        if value is not None:
-            try:
-                return int(value)
-            except ValueError:
-                return 0  # options_problems names it
+    given = stage_options.given(stage_options.words(config, "calibration.options")).get("--min-samples")
+    if given:
+        return int(given[0])  # (checked by options_problems before)
     tree = ast.parse((Path(root) / "calibrate" / "io.py").read_text())
     for node in tree.body:
         if isinstance(node, ast.Assign) and any(getattr(t, "id", None) == "MIN_SAMPLES" for t in node.targets):
@@ -343,72 +338,6 @@ def calibration_problems(config: dict) -> list[str]:
     return out
 
 
-def _argparse_error(parser, argv) -> str | None:
-    """argparse's own complaint about ``argv`` (its last stderr line), or None when it parses."""
-    import contextlib
-    import io
-
-    err = io.StringIO()
-    try:
-        with contextlib.redirect_stderr(err):
-            parser.parse_args(argv)
-    except SystemExit:
-        lines = err.getvalue().strip().splitlines()
-        return lines[-1].split("error: ", 1)[-1] if lines else "not accepted"
-    return None
-
-
-def options_problems(config: dict) -> list[str]:
-    """Extra command-line options of calibrate and compare, parsed by their own parsers now, not after the DEM."""
-    import shlex
-
-    out = []
-    calibration = (config.get("calibration") or {}).get("options", "")
-    compare = (config.get("compare") or {}).get("options", "")
-    checks = []
-    if calibration.strip():
-        from calibrate.__main__ import parser as calibrate_parser
-
-        checks.append(("calibration.options", calibration, calibrate_parser(), ["--dem", "d", "--out", "o"],
-                       "options of python -m calibrate --help"))
-    if compare.strip():
-        from compare.cli import build_parser
-
-        checks.append(("compare.options", compare, build_parser(),
-                       ["predict", "--dem", "d", "--params", "p", "--out", "o"],
-                       "options of python -m compare predict --help"))
-    for key, value, parser, required, allowed in checks:
-        try:
-            argv = shlex.split(value)
-        except ValueError as exc:
-            out.append(problem(key, value, f"cannot be split into options ({exc})", allowed))
-            continue
-        error = _argparse_error(parser, [*required, *argv])
-        if error:
-            out.append(problem(key, value, error, allowed))
-    return out
-
-
-def results_dir_problems(config: dict, root=ROOT) -> list[str]:
-    """A results folder that is a folder of its own: not empty, not a root, not the code's."""
-    value = config.get("results_dir", "results")
-    key, allowed = "results_dir", "a folder of its own, e.g. results or /scratch/me/results"
-    if not str(value).strip():
-        return [problem(key, value, "is empty", allowed)]
-    if any(ch.isspace() for ch in str(value)):
-        return [problem(key, value, "contains white space (the rules' shell commands do not quote paths)", allowed)]
-    root = Path(root).resolve()
-    path = (root / value).resolve()
-    if path == Path(path.anchor):
-        return [problem(key, value, "is the root of the file system", allowed)]
-    if path == root or path in root.parents:
-        return [problem(key, value, "is the repository or a folder above it: outputs would mix with the code",
-                        allowed)]
-    if root in path.parents and path.relative_to(root).parts[0] in SOURCE_FOLDERS:
-        return [problem(key, value, f"lies in the repository's {path.relative_to(root).parts[0]}/ folder", allowed)]
-    return []
-
-
 def study_problems(config: dict) -> list[str]:
     """The DEM study's grid (when it runs): dem_study.grid's own checks, bulk band and width per height."""
     acc = config.get("accuracy") or {}
@@ -484,9 +413,10 @@ def check(config: dict, configfiles=(), schema_path=SCHEMA, root=ROOT) -> list[s
             and not (rate and line.startswith("config error: loading: {") and "not valid under any of" in line)]
     if out:
         return out
-    for step in (results_dir_problems, loading_problems, cell_problems, periodic_cell_key_problems,
+    out += results_dir_problems(config, root) + release_problems(config, root)
+    for step in (loading_problems, cell_problems, periodic_cell_key_problems,
                  protocol_problems, calibration_problems, options_problems, study_problems):
-        out += step(config, root) if step is results_dir_problems else step(config)
+        out += step(config)
     if not out:
         out += sample_count_problems(config, root)  # (needs intervals in order and valid options)
     return out or scene_problems(config, root)

@@ -350,15 +350,16 @@ def preflight_check(*configfiles):
     return run_main("preflight.__main__", ["check", *configfiles])
 
 
-def workflow_rules(workdir, configfile):
-    """The rules of the workflow in ``workdir`` (a ``workflow_copy``) parsed with ``configfile``, through
-    Snakemake's API (no job runs): their names, shell commands and outputs with their flags."""
+def workflow_rules(workdir, *configfiles, config=None):
+    """The rules of the workflow in ``workdir`` (a ``workflow_copy``) parsed with ``configfiles`` (later ones
+    override earlier ones) and the ``--config`` values ``config``, through Snakemake's API (no job runs):
+    their names, shell commands and outputs with their flags."""
     from snakemake.api import SnakemakeApi
     from snakemake.settings.types import ConfigSettings, OutputSettings, ResourceSettings, StorageSettings
 
     with SnakemakeApi(OutputSettings()) as api:
         workflow = api.workflow(
             resource_settings=ResourceSettings(), storage_settings=StorageSettings(),
-            config_settings=ConfigSettings(configfiles=[Path(configfile)]),
+            config_settings=ConfigSettings(configfiles=[Path(f) for f in configfiles], config=config or {}),
             snakefile=Path(workdir) / "Snakefile", workdir=Path(workdir))
         return list(workflow._workflow.rules)

@@ -17,6 +17,7 @@ QUICK = yaml.safe_load((ROOT / "config" / "quick.yaml").read_text())
 def two_cells(tmp_path):
     config = yaml.safe_load((ROOT / "config" / "quick.yaml").read_text())
     config["results_dir"] = str(tmp_path / "results")
+    config["allow_outside_tree"] = True  # a results folder under pytest's tmp_path
     config["accuracy"]["bulk_vs_walls"] = dict(
         run=True,
         cells={"W4H-H12": dict(kind="walls", H_over_d=12, W_over_H=4),
@@ -167,6 +168,7 @@ def test_tiny_study_runs_end_to_end_through_snakemake(tmp_path, workflow_dir):
     """Two real ~100-disk cells (walls and periodic) x two seeds, to the table and the figure."""
     config = yaml.safe_load((ROOT / "config" / "ci.yaml").read_text())
     config["results_dir"] = str(tmp_path / "results")
+    config["allow_outside_tree"] = True  # a results folder under pytest's tmp_path
     config["accuracy"] = dict(ode_work_precision=False, bulk_vs_walls=dict(
         run=True,
         cells={"walls-H8": dict(kind="walls", H_over_d=8, W_over_H=2),

@@ -13,6 +13,7 @@ import pytest
 
 from calibrate import io, synthetic
 from model import default_params
+from tests.helpers import run_main
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -74,6 +75,30 @@ def test_command_line_exits_2_naming_the_file(good_case, tmp_path):
     assert r.returncode == 2
     assert "heaviside.csv: column 'A_xx'" in r.stderr
     assert not (out / "params.yaml").exists()
+
+
+def bad_fabric(good_case, tmp_path):
+    case = copy_case(good_case, tmp_path / "p1_I0.001_s1")
+    df = pd.read_csv(case / "heaviside.csv")
+    df.loc[3, "A_xx"] = np.inf
+    df.to_csv(case / "heaviside.csv", index=False)
+    return case, "heaviside.csv: column 'A_xx'"
+
+
+def no_such_case(good_case, tmp_path):
+    return tmp_path / "p1_I0.001_s9", "p1_I0.001_s9"
+
+
+@pytest.mark.parametrize("refusal", [bad_fabric, no_such_case], ids=["bad DEM file", "missing case"])
+def test_a_refused_calibration_leaves_no_out_folder_it_created(good_case, tmp_path, refusal):
+    """Issue 33: every refused calibrate left an empty --out (and its new parents); an --out that existed stays."""
+    case, words = refusal(good_case, tmp_path)
+    r = run_main("calibrate.__main__", ["--dem", case, "--out", tmp_path / "new" / "cal"])
+    assert r.returncode == 2 and words in r.stderr
+    assert not (tmp_path / "new").exists()
+    (tmp_path / "old").mkdir()
+    r = run_main("calibrate.__main__", ["--dem", case, "--out", tmp_path / "old"])
+    assert r.returncode == 2 and (tmp_path / "old").is_dir()
 
 
 def test_cases_with_different_protocols_are_read_each_with_its_own_runs(good_case, tmp_path):

@@ -59,6 +59,7 @@ def finished(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("calreruns")
     config = copy.deepcopy(CONFIG)
     config["results_dir"] = str(tmp / "results")
+    config["allow_outside_tree"] = True  # a results folder under pytest's tmp_path
     synthetic.write_ensemble(tmp / "results" / "dem", default_params(), seeds=(1, 2, 3), group=GROUP, I=0.01,
                              fabric_noise=synthetic.FABRIC_NOISE, mu_noise=synthetic.MU_NOISE)
     result = calibrate_sets(config, tmp / "config.yaml", "-j1")

@@ -11,9 +11,11 @@ with code 2, plan no job, and print the very lines the command printed.
 """
 import copy
 import math
+import shutil
 import subprocess
 import sys
 from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
 
 import pytest
 import yaml
@@ -105,7 +107,33 @@ CASES = {
     "results_dir_empty": (edited(results_dir=""), ["results_dir"]),
     "results_dir_repository": (edited(results_dir="."), ["results_dir", "repository"]),
     "results_dir_code_folder": (edited(results_dir="compare"), ["results_dir", "compare/"]),
-    "results_dir_with_space": (edited(results_dir="my results"), ["results_dir", "white space"]),
+    "results_dir_with_space": (edited(results_dir="my results"), ["results_dir", "letters, digits and . _ - /"]),
+    # where results_dir and release may lie (preflight/paths.py; issue 33, item 1)
+    "results_dir_with_a_backtick": (edited(results_dir="r`touch$IFS./PWNED`"),
+                                    ["results_dir", "does not match", "no space, quote, $, backtick"]),
+    "results_dir_system_folder": (edited(results_dir="/etc"), ["results_dir", "system folder /etc"]),
+    "results_dir_system_folder_even_when_allowed": (edited(results_dir="/usr/local/results", allow_outside_tree=True),
+                                                    ["results_dir", "system folder /usr"]),
+    "results_dir_outside_the_tree": (edited(results_dir="/var/tmp/someone/results"),
+                                     ["results_dir", "outside the working tree", "allow_outside_tree: true"]),
+    "results_dir_climbing_out_of_the_tree": (edited(results_dir="results/../../elsewhere"),
+                                             ["results_dir", "outside the working tree"]),
+    "results_dir_directly_under_the_root": (edited(results_dir="/tmp", allow_outside_tree=True),
+                                            ["results_dir", "directly under /"]),
+    "results_dir_hidden_folder": (edited(results_dir=".snakemake/results"),
+                                  ["results_dir", "hidden folder (.snakemake"]),
+    "results_dir_home_folder": (edited(results_dir=str(Path.home()), allow_outside_tree=True),
+                                ["results_dir", "home folder"]),
+    "opt_in_given_as_text": (edited(results_dir="/var/tmp/x/results", allow_outside_tree="true"),
+                             ["allow_outside_tree", "write True"]),
+    "release_with_a_backtick": (edited(release="data/x`touch$IFS./PWNED`"), ["release", "does not match"]),
+    "release_outside_the_tree": (edited(release="/var/tmp/someone/data/x"),
+                                 ["release", "outside the working tree", "allow_outside_tree: true"]),
+    "release_in_a_system_folder": (edited(release=["data/bulk-decide", "/usr/share/x"], allow_outside_tree=True),
+                                   ["release[1]", "system folder /usr"]),
+    "monodisperse_cell": (edited(material={"size_ratio_min": 1.0, "size_ratio_max": 1.0}),
+                          ["material.size_ratio_min", "size_ratio_max = 1", "crystal",
+                           "size_ratio_min < size_ratio_max"]),
     "cell_too_narrow": (edited(cell={"H_over_d": 4, "W_over_H": 1}, sampling={"bulk_exclusion_d": 1}),
                         ["cell.W_over_H", "3 of the largest disks"]),
     "number_read_as_text": (CI_TEXT.replace("pressures: [1.0e+5]", "pressures: [1.0e5]"),
@@ -113,11 +141,31 @@ CASES = {
     "both_rates": (edited(loading={"pressures": [1e5], "inertial_numbers": [1e-2], "wall_velocities": [0.1]}),
                    ["loading", "not both"]),
     "calibration_option_misspelt": (edited(calibration={"options": "--bootstrapp 8"}),
-                                    ["calibration.options", "unrecognized arguments: --bootstrapp"]),
+                                    ["calibration.options", "--bootstrapp is not an option of the program"]),
     "calibration_option_bad_value": (edited(calibration={"options": "--bootstrap eight"}),
                                      ["calibration.options", "--bootstrap: invalid int value: 'eight'"]),
     "compare_option_misspelt": (edited(compare={"options": "--zoom-in 0.05"}),
-                                ["compare.options", "unrecognized arguments: --zoom-in"]),
+                                ["compare.options", "--zoom-in is not an option of the program",
+                                 "options of python -m compare predict --help"]),
+    # options the rule passes itself: a second one would silently replace the rule's (issue 33, item 3)
+    "calibration_option_protocols_of_the_workflow": (
+        edited(calibration={"options": "--bootstrap 8 --protocols heaviside"}),
+        ["calibration.options", "--protocols is the workflow's own", "calibration.sets", "except --dem"]),
+    "calibration_option_out_of_the_workflow": (edited(calibration={"options": "--out elsewhere"}),
+                                               ["calibration.options", "--out is the workflow's own", "results_dir"]),
+    "calibration_option_dem_of_the_workflow": (edited(calibration={"options": "--dem=elsewhere"}),
+                                               ["calibration.options", "--dem is the workflow's own"]),
+    "calibration_option_freeform_of_its_key": (edited(calibration={"options": "--freeform"}),
+                                               ["calibration.options", "--freeform", "calibration.freeform"]),
+    "calibration_option_abbreviated": (edited(calibration={"options": "--prot heaviside"}),
+                                       ["calibration.options", "--prot is not written in full", "--protocols"]),
+    "compare_option_protocols_of_the_workflow": (edited(compare={"options": "--protocols heaviside"}),
+                                                 ["compare.options", "--protocols is the workflow's own"]),
+    "compare_option_train_protocols_of_the_workflow": (
+        edited(compare={"options": "--train-protocols heaviside"}),
+        ["compare.options", "--train-protocols is the workflow's own", "calibration.sets"]),
+    "calibration_option_with_a_shell_character": (edited(calibration={"options": "--route2-method 'LSODA'"}),
+                                                  ["calibration.options", "does not match", "no quote, $"]),
     "schema_range": (edited(cell={"H_over_d": 1}), ["cell.H_over_d", "minimum of 4"]),
     "study_subset_outside_grid": (
         edited(accuracy={"dem_study": True, "base": {"kappa": 1e3, "inertial_number": 1e-2, "H_over_d": 8,
@@ -139,7 +187,7 @@ def config_text(edit):
 #: Cases also run through the real Snakemake dry run: one of each kind of check, so that the
 #: Snakefile's wiring (exit 2 before the DAG, no traceback, the file:line) stays tested end to end.
 END_TO_END = ["schema_range", "bulk_exclusion_fills_the_gap", "duplicated_key", "calibration_option_misspelt",
-              "results_dir_code_folder"]
+              "results_dir_code_folder", "results_dir_system_folder", "monodisperse_cell"]
 
 
 def write_case(folder, name):
@@ -251,6 +299,47 @@ def test_the_preflight_command_exits_2_with_one_line_naming_a_file_it_cannot_rea
                             cwd=ROOT, capture_output=True, text=True, timeout=60)
     assert result.returncode == 2 and "Traceback" not in result.stderr, result.stderr
     assert result.stderr.strip() == f"config error: {tmp_path / 'absent.yaml'}: no such file"
+
+
+def test_results_dir_on_a_scratch_disk_passes_with_allow_outside_tree():
+    config = copy.deepcopy(CI)
+    config["results_dir"] = "/work/stiff/k1e05"
+    assert [line.split(":")[1] for line in preflight.check(config)] == [" results_dir = '/work/stiff/k1e05'"]
+    config["allow_outside_tree"] = True
+    assert preflight.check(config) == []
+
+
+def test_a_relative_release_in_the_repository_passes_without_the_opt_in():
+    config = copy.deepcopy(CI)
+    config["release"] = ["data/bulk-decide", str(ROOT / "data" / "bulk-validation-paper")]
+    assert preflight.check(config) == []
+
+
+def copy_with_preset(folder, preset, text):
+    """A working copy whose config/ is its own, with ``preset`` holding ``text`` (None: no such file)."""
+    shutil.copytree(ROOT / "config", folder / "config")
+    if text is None:
+        (folder / "config" / preset).unlink()
+    else:
+        (folder / "config" / preset).write_text(text)
+    return workflow_copy(folder)
+
+
+@pytest.mark.parametrize("target, preset", [("quick", "quick.yaml"), ("paper", "config.yaml")])
+@pytest.mark.parametrize("text, words", [(None, ": no such file"),
+                                         ("campaign: x\nloading: {pressures: [1\n", ":3: expected ',' or ']'")])
+def test_make_names_a_missing_or_malformed_preset_with_its_line_before_snakemake(tmp_path, target, preset, text,
+                                                                                 words):
+    folder = copy_with_preset(tmp_path / "copy", preset, text)
+    result = subprocess.run(["make", "-o", "setup", target], cwd=folder, capture_output=True, text=True, timeout=300)
+    assert result.returncode == 2, result.stdout + result.stderr
+    assert f"config error: config/{preset}{words}" in result.stderr, result.stderr
+    assert "snakemake" not in result.stdout and "Traceback" not in result.stderr, result.stdout + result.stderr
+
+
+def test_make_test_checks_the_ci_preset_before_the_suite():
+    plan = subprocess.run(["make", "-n", "-o", "setup", "test"], cwd=ROOT, capture_output=True, text=True, timeout=60)
+    assert plan.stdout.splitlines()[0] == ".venv/bin/python -m preflight check config/ci.yaml", plan.stdout
 
 
 def test_config_folder_is_named():

@@ -33,7 +33,7 @@ def inputs(tmp_path_factory):
     (d / "a_file").write_text("not a folder\n")
     good = d / "good.yaml"
     save_params(default_params(), good)
-    (d / "version_one.yaml").write_text(good.read_text().replace("version: 1", "version: one"))
+    (d / "version_one.yaml").write_text(good.read_text().replace("version: 2", "version: one"))
     (d / "bad_key.yaml").write_text(good.read_text().replace("X_c:", "Xc:"))
     (d / "cut_table.csv").write_text("t,gammadot\n0,1\n1,1\n2,\n")
     (d / "no_rate.csv").write_text("t,rate\n0,1\n1,1\n")

@@ -8,7 +8,7 @@ from compare.cli import main
 from compare.dem import load_reversal
 from compare.predict import clean_rate, predict
 from dem_contract.synthetic import write_case, write_ensemble
-from model import default_params, save_params
+from model import default_params, params_from_dict, save_params
 
 
 @pytest.fixture(scope="module")
@@ -113,8 +113,7 @@ def test_pole_error_of_model1_is_a_table_row_not_a_crash(tmp_path):
     p = default_params().to_dict()
     p["model1"]["X_c"] = 0.065             # below the mirrored steady X (0.070): Model 1 cannot start
     bad = tmp_path / "bad.yaml"
-    import yaml
-    bad.write_text(yaml.safe_dump(p))
+    save_params(params_from_dict(p), bad)
     dirs = write_ensemble(tmp_path / "dem", default_params(), seeds=(1, 2), preshear_strain=0.3,
                           reversal_strain=0.3, fabric_noise=0.0125, mu_noise=0.04)
     out = tmp_path / "out"
@@ -173,8 +172,7 @@ def test_sensitivity_moves_predictions_more_at_5_than_at_1_percent_and_records_p
     p = default_params().to_dict()
     p["intervals"] = {"model1": {"X_c": [0.06, 0.09]}}    # the low end puts the pole below the mirrored X
     path = tmp_path / "p.yaml"
-    import yaml
-    path.write_text(yaml.safe_dump(p))
+    save_params(params_from_dict(p), path)
     table, n = sensitivity.run(dirs, path, ["heaviside"], tmp_path / "band.png")
     assert n <= 2 * 60 and (tmp_path / "band.png").stat().st_size > 0
     a1 = table[(table["model"] == "model1") & (table["parameter"] == "a1")].set_index("kind")

@@ -1,14 +1,13 @@
 """The sensitivity study on the batched integrator (compare.predict.predict_many) against one LSODA run at a time."""
 import numpy as np
 import pytest
-import yaml
 
 from compare import sensitivity
 from compare.dem import load_reversal
 from compare.predict import predict, predict_many
 from dem_contract import angle_difference
 from dem_contract.synthetic import FABRIC_NOISE, MU_NOISE, write_ensemble
-from model import default_params
+from model import default_params, params_from_dict, save_params
 
 AGREE = 1e-6     # batched against LSODA: |A|, mu; theta_A in degrees (model/batched.py)
 # theta_A = atan2(A_xy, A_xx)/2 turns a difference e of the fabric into e/(2|A|) rad: where a perturbed
@@ -24,7 +23,7 @@ def cases(tmp_path_factory):
                           fabric_noise=FABRIC_NOISE, mu_noise=MU_NOISE)
     p = default_params().to_dict()
     p["intervals"] = {"model1": {"X_c": [0.06, 0.09], "c2": [900.0, 1100.0]}, "model2": {"c3": [-2.0, 0.0]}}
-    (root / "p.yaml").write_text(yaml.safe_dump(p))
+    save_params(params_from_dict(p), root / "p.yaml")
     return root, dirs
 
 

@@ -22,7 +22,7 @@ import pandas as pd
 import pytest
 import yaml
 
-from dem_contract import DEMInputError, read_series, release, synthetic
+from dem_contract import DEMInputError, published, read_series, release, synthetic
 from dem_contract.importer import import_cases
 from model import default_params
 from tests.helpers import counts, dry_run, snakemake
@@ -37,7 +37,8 @@ RUN_RELEASE_DEM = os.environ.get("RUN_RELEASE_DEM") == "1"
 def campaign_config(results_dir, seeds=SEEDS, **extra):
     """The CI preset on a smaller cell (calibration, comparison and claims still run), no accuracy studies."""
     config = yaml.safe_load((ROOT / "config" / "ci.yaml").read_text())
-    config.update(results_dir=str(results_dir), seeds=list(seeds), cell={"H_over_d": 6, "W_over_H": 2},
+    config.update(results_dir=str(results_dir), allow_outside_tree=True,  # (pytest's tmp_path)
+                  seeds=list(seeds), cell={"H_over_d": 6, "W_over_H": 2},
                   accuracy={"ode_work_precision": False, "batched_cost": False, "calibration_cost": False,
                             "dem_study": False}, **extra)
     return config
@@ -258,7 +259,7 @@ def test_released_case_dem_reruns_identically(released, module_workflow_dir, tmp
     folder = COMMITTED[0] if COMMITTED else released[2]
     manifest = release.read_manifest(folder)
     label, case = next(iter(manifest["cases"].items()))
-    config = dict(manifest["config"], results_dir=str(tmp_path / "results"), release=[])
+    config = dict(manifest["config"], results_dir=str(tmp_path / "results"), release=[], allow_outside_tree=True)
     targets = [tmp_path / "results" / case["source"] / label / f"{p}.csv" for p in case["protocols"]]
     run = snakemake("-j1", *targets, "--configfile", write(config, tmp_path / "config.yaml"), cwd=module_workflow_dir,
                     timeout=None)
@@ -298,7 +299,7 @@ def test_the_released_validation_cells_decide_the_narrow_cell_without_yade(workf
     in the plan), and the study's own tolerance rule finds the narrow cell H = 37d, W = 18.5d the W = 4H,
     H = 24d wall cell's material at the paper's physics (docs/findings.md, "The narrow cell at the paper's physics")."""
     args = ["bulk_vs_walls", "--configfile", "config/bulk.yaml", "config/bulk_validation_paper.yaml",
-            "--config", f"results_dir={tmp_path / 'results'}", f"release={PAPER_VALIDATION}"]
+            "--config", f"results_dir={tmp_path / 'results'}", "allow_outside_tree=True", f"release={PAPER_VALIDATION}"]
     plan = dry_run(*args, cwd=workflow_dir)
     assert plan.returncode == 0, plan.stderr[-3000:]
     c = counts(plan.stdout)
@@ -319,6 +320,7 @@ def test_the_deciding_preset_takes_every_case_from_its_release(workflow_dir, tmp
     """config/bulk_decide.yaml names data/bulk-decide: its dry run restores every case and plans no DEM job."""
     from tests.helpers import counts, dry_run
     plan = dry_run("--configfile", "config/bulk_decide.yaml", "--config", f"results_dir={tmp_path / 'results'}",
+                   "allow_outside_tree=True",
                    cwd=workflow_dir)
     assert plan.returncode == 0, plan.stderr[-3000:]
     c = counts(plan.stdout)
@@ -328,18 +330,21 @@ def test_the_deciding_preset_takes_every_case_from_its_release(workflow_dir, tmp
 
 @pytest.mark.slow
 @pytest.mark.skipif(not (DECIDE.is_dir() and RUN_RELEASE_CLAIMS),
-                    reason="opt-in: RUN_RELEASE_CLAIMS=1 (calibrates the deciding campaign from its release, minutes)")
-def test_the_deciding_campaign_recomputed_from_its_release_gives_its_published_claims(workflow_dir, tmp_path):
+                    reason="opt-in: RUN_RELEASE_CLAIMS=1 (calibrates the deciding campaign from its release, minutes; "
+                           ".ci/run runs it)")
+def test_the_deciding_campaign_recomputed_from_its_release_gives_its_published_tables(workflow_dir, tmp_path):
     """26.4a on the committed release: calibration, comparison and claims from data/bulk-decide alone (no YADE)
-    write the claims table and the reversal-design table the campaign published, byte for byte."""
+    give every table in its published/ (claims, reversal design, power, plan, parameters): every published row,
+    the verdicts and counts exactly, the numbers to dem_contract.published.RTOL (its docstring says why)."""
     from tests.helpers import snakemake as snakemake_in
     results = tmp_path / "results"
-    run = snakemake_in("-j2", results / "claims" / "paper_claims.csv", "--configfile", "config/bulk_decide.yaml",
-                       "--config", f"results_dir={results}", cwd=workflow_dir, timeout=None)
+    targets = list(published.published_tables(DECIDE, results).values())
+    assert {p.name for p in targets} >= {"paper_claims.csv", "params_table.csv"}
+    run = snakemake_in("-j2", *targets, "--configfile", "config/bulk_decide.yaml", "--config",
+                       f"results_dir={results}", "allow_outside_tree=True", cwd=workflow_dir, timeout=None)
     assert run.returncode == 0, run.stderr[-3000:]
     assert not any(f"rule {r}:" in run.stderr + run.stdout for r in DEM_RULES)
-    for name in ("paper_claims.csv", "reversal_design.csv"):
-        assert filecmp.cmp(results / "claims" / name, DECIDE / "published" / name, shallow=False), name
+    assert published.compare(DECIDE, results) == []
 
 
 def test_a_release_remade_in_place_is_not_called_dirty_for_its_own_deleted_folder(tmp_path):

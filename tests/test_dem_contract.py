@@ -14,15 +14,27 @@ def write_run(path, n=60, **changes):
     """A well-formed contract CSV of ``n`` rows, with columns replaced by ``changes``.
 
     Physical values: time and strain increase, strain = integral of gammadot (0.01 per
-    unit time), |A_ij| < 1/2, p > 0 and mu within its range.
+    unit time), |A_ij| < 1/2, p > 0 and mu = |sigma_xy|/p within its range.
     """
     df = pd.DataFrame({c: np.linspace(0.01, 1.0, n) for c in CONTRACT_COLUMNS})
     df["t"] = np.arange(1.0, n + 1.0)
     df["gammadot"] = 0.01
     df["strain"] = 0.01 * (df["t"] - 1.0)
     df["A_xx"], df["A_xy"] = np.linspace(-0.02, -0.01, n), np.linspace(0.03, 0.05, n)
+    df["sigma_xy"], df["p"] = np.linspace(0.2, 0.3, n), np.linspace(0.9, 1.1, n)
+    df["mu"] = df["sigma_xy"].abs() / df["p"]
     for c, v in changes.items():
         df[c] = v
+    df.to_csv(path, index=False)
+    return path
+
+
+def edited_run(path, columns, value, row=None):
+    """``write_run``'s run with ``columns`` set to ``value`` (or to ``value(old values)``) in ``row`` (default all)."""
+    write_run(path)
+    df = pd.read_csv(path)
+    rows = df.index if row is None else [row]
+    df.loc[rows, columns] = value(df.loc[rows, columns]) if callable(value) else value
     df.to_csv(path, index=False)
     return path
 
@@ -125,12 +137,26 @@ def test_a_last_line_without_its_newline_is_named(tmp_path):
     ("A_xy", 50.0, r"\[-0\.5, 0\.5\]"), ("A_xx", -0.6, r"\[-0\.5, 0\.5\]"),
     ("p", 0.0, r"\(0, inf\]"), ("mu", -0.1, r"\[0, 2\]"), ("mu", 7.0, r"\[0, 2\]")])
 def test_a_value_outside_its_physical_range_is_named_with_its_row(tmp_path, column, value, allowed):
-    path = write_run(tmp_path / "preshear.csv")
-    df = pd.read_csv(path)
-    df.loc[11, column] = value
-    df.to_csv(path, index=False)
+    path = edited_run(tmp_path / "preshear.csv", column, value, row=11)
     with pytest.raises(DEMInputError, match=rf"preshear\.csv: column '{column}' = {value:g} at data row 12 is "
                                             rf"outside its physical range {allowed}"):
+        read_series(path)
+
+
+def test_read_series_refuses_a_mu_that_is_not_sigma_xy_over_p_naming_the_row(tmp_path):
+    """mu twice |sigma_xy|/p (issue 33's factor 2) in one row: refused with the file, the column and the row."""
+    path = edited_run(tmp_path / "preshear.csv", "mu", lambda mu: 2 * mu, row=11)
+    with pytest.raises(DEMInputError, match=r"preshear\.csv: column 'mu' = 0\.4\d* at data row 12 but "
+                                            r"\|sigma_xy\|/p = 0\.2\d* there \(1 row\(s\) in all\)"):
+        read_series(path)
+
+
+def test_read_series_refuses_stresses_in_pascal_with_a_hint_about_si_units(tmp_path):
+    """sigma_xy and p times 1e5 (Pa at the campaigns' pressure): mu still agrees, the scale does not."""
+    path = edited_run(tmp_path / "preshear.csv", ["sigma_xy", "p"], lambda v: 1e5 * v)
+    with pytest.raises(DEMInputError, match=r"preshear\.csv: column 'sigma_xy' = 20000 at data row 1 is not of order "
+                                            r"1 \(60 row\(s\) in all\): .* looks like SI \(Pa\): divide the "
+                                            r"stresses by the imposed pressure"):
         read_series(path)
 
 

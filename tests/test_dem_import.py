@@ -7,6 +7,7 @@ history, with only the required columns, a start from rest (the wall speed
 steps from 0 at t = 0), and a metadata YAML.
 """
 import json
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -234,3 +235,72 @@ def test_import_names_a_missing_metadata_key_and_exits_2(tmp_path):
     (tmp_path / "case.yaml").write_text("pressure: 1.0e5\ncases: []\n")
     done = run_cli("dem_contract", "import", "--meta", str(tmp_path / "case.yaml"), "--out", str(tmp_path / "dem"))
     assert done.returncode == 2 and "case.yaml: missing key 'inertial_number'" in done.stderr
+
+
+# --------------------------------------------------------------------------- what the contract implies, or refused
+
+
+def flip(column):
+    def edit(run):
+        run[column] = -run[column]
+    return edit
+
+
+def double_mu(run):
+    run["mu"] = 2 * run["sigma_xy"].abs() / run["p"]
+
+
+def in_pascal(run):
+    run[["sigma_xy", "p"]] *= 1.0e5
+
+
+@pytest.mark.parametrize("edit, words", [
+    (flip("sigma_xy"), r"seed1_heaviside\.csv: run heaviside of seed 1: column 'sigma_xy' has the wrong sign in the "
+                       r"pre-shear's steady window \(data rows \d+-\d+, rate > 0\)"),
+    (flip("A_xy"), r"seed1_heaviside\.csv: run heaviside of seed 1: column 'A_xy' has the wrong sign in the "
+                   r"pre-shear's steady window \(data rows \d+-\d+, rate > 0\)"),
+    (double_mu, r"seed1_heaviside\.csv: column 'mu' = [\d.]+ at data row \d+ but \|sigma_xy\|/p = [\d.]+ there"),
+    (in_pascal, r"seed1_heaviside\.csv: column 'sigma_xy' = .* is not of order 1 .* looks like SI \(Pa\)"),
+], ids=["sigma_xy sign-flipped", "A_xy sign-flipped", "mu twice |sigma_xy|/p", "stresses in Pa"])
+def test_import_refuses_a_run_that_breaks_the_contract_naming_the_input_file_and_writes_nothing(tmp_path, edit, words):
+    """Issue 33's four silent acceptances, each in one of two runs of one seed: the good import passes, the edited
+    one exits 2 naming the input file (and the column, run and rows), and leaves ``--out`` as it was."""
+    meta = write_external(tmp_path, seeds=(1,), protocols=("heaviside", "sinusoidal"))
+    done = run_main("dem_contract.__main__", ["import", "--meta", meta, "--out", tmp_path / "good"])
+    assert done.returncode == 0, done.stderr
+    path = meta.parent / "seed1_heaviside.csv"
+    run = pd.read_csv(path)
+    edit(run)
+    run.to_csv(path, index=False)
+    (tmp_path / "dem").mkdir()
+    (tmp_path / "dem" / "kept.txt").write_text("an earlier file\n")
+    done = run_main("dem_contract.__main__", ["import", "--meta", meta, "--out", tmp_path / "dem"])
+    assert done.returncode == 2
+    assert re.search(words, done.stderr), done.stderr
+    assert [p.name for p in (tmp_path / "dem").iterdir()] == ["kept.txt"]
+    assert not any(p.name.startswith(".dem.") for p in tmp_path.iterdir())
+
+
+def test_a_refused_import_leaves_no_folder_it_created(tmp_path):
+    """An --out whose parents do not exist yet: a refused import leaves none of them."""
+    meta = write_external(tmp_path, seeds=(1,), protocols=("heaviside",))
+    run = pd.read_csv(meta.parent / "seed1_heaviside.csv")
+    flip("sigma_xy")(run)
+    run.to_csv(meta.parent / "seed1_heaviside.csv", index=False)
+    done = run_main("dem_contract.__main__", ["import", "--meta", meta, "--out", tmp_path / "new" / "dem"])
+    assert done.returncode == 2 and "seed1_heaviside.csv" in done.stderr
+    assert not (tmp_path / "new").exists()
+
+
+def test_a_second_import_replaces_its_cases_and_keeps_the_others(tmp_path):
+    """Imported cases are moved into --out whole: a case imported again replaces its folder; other folders stay."""
+    meta = write_external(tmp_path, seeds=(1,), protocols=("heaviside", "sinusoidal"))
+    out = tmp_path / "dem"
+    (out / "p1_I0.001_s9").mkdir(parents=True)
+    assert run_main("dem_contract.__main__", ["import", "--meta", meta, "--out", out]).returncode == 0
+    text = yaml.safe_load(meta.read_text())
+    text["cases"][0]["runs"] = text["cases"][0]["runs"][:1]       # the heaviside run alone
+    meta.write_text(yaml.safe_dump(text))
+    assert run_main("dem_contract.__main__", ["import", "--meta", meta, "--out", out]).returncode == 0
+    assert sorted(p.name for p in out.iterdir()) == ["p100000_I0.001_s1", "p1_I0.001_s9"]
+    assert sorted(p.name for p in (out / "p100000_I0.001_s1").glob("*.csv")) == ["heaviside.csv", "preshear.csv"]

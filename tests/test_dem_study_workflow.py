@@ -51,6 +51,7 @@ def test_tiny_study_runs_end_to_end_through_snakemake(tmp_path, workflow_dir):
     """Three real ~200-disk points (two seeds at the base, one other I): about a minute on one core."""
     config = yaml.safe_load((ROOT / "config" / "ci.yaml").read_text())
     config["results_dir"] = str(tmp_path / "results")
+    config["allow_outside_tree"] = True  # a results folder under pytest's tmp_path
     config["accuracy"] = dict(
         ode_work_precision=False, dem_study=True, subset="default",
         base=dict(kappa=1e3, inertial_number=1e-2, H_over_d=8, dt_over_tc=0.1, fine_interval=0.002,

@@ -27,6 +27,7 @@ def periodic(config):
 def check(config, tmp_path):
     config = copy.deepcopy(config)
     config["results_dir"] = str(tmp_path / "results")
+    config["allow_outside_tree"] = True  # a results folder under pytest's tmp_path
     path = tmp_path / "config.yaml"
     path.write_text(yaml.safe_dump(config))
     return preflight_check(path)

@@ -79,6 +79,7 @@ def test_lock_of_another_host_is_trusted_until_it_goes_stale(tmp_path):
 def campaign(tmp_path):
     config = copy.deepcopy(CONFIG)
     config["results_dir"] = str(tmp_path / "results")
+    config["allow_outside_tree"] = True  # a results folder under pytest's tmp_path
     path = tmp_path / "config.yaml"
     path.write_text(yaml.safe_dump(config))
     cases = [tmp_path / "results" / "dem" / f"p100000_I0.01_s{seed}" for seed in (1, 2)]

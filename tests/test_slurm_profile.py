@@ -71,7 +71,8 @@ def test_ci_preset_runs_through_a_local_slurm(tmp_path):
         subprocess.run([script, "up"], check=True, timeout=900)
     results = tmp_path / "results"
     workdir = workflow_copy(tmp_path / "workflow")  # its .snakemake/ (and slurm_logs/) its own
-    smk = [*SNAKEMAKE, "--configfile", "config/ci.yaml", "--config", f"results_dir={results}"]
+    smk = [*SNAKEMAKE, "--configfile", "config/ci.yaml", "--config", f"results_dir={results}",
+           "allow_outside_tree=True"]
     try:
         t0 = time.monotonic()
         run = subprocess.run([*smk, "--profile", "profiles/slurm", "--slurm-logdir", str(tmp_path / "slurm")],

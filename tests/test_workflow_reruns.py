@@ -35,6 +35,7 @@ def finished(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("reruns")
     config = copy.deepcopy(TINY)
     config["results_dir"] = str(tmp / "results")
+    config["allow_outside_tree"] = True  # a results folder under pytest's tmp_path
     targets = [f"{config['results_dir']}/dem/{case}/heaviside.csv" for case in CASES]
     result = snakemake("-j1", *targets, "--configfile", write(config, tmp / "config.yaml"),
                        cwd=workflow_copy(tmp / "workflow"), timeout=600)

@@ -18,6 +18,8 @@ rule ode_work_precision:
             caption="../report/ode_work_precision.rst",
             category="Accuracy and cost",
         ),
+    params:
+        out=f"{RESULTS}/accuracy",
     resources:
         runtime=COST_ODE_WORK_PRECISION.runtime,
         mem_mb=COST_ODE_WORK_PRECISION.mem_mb,
@@ -27,7 +29,7 @@ rule ode_work_precision:
         f"{RESULTS}/benchmarks/accuracy/ode_work_precision.tsv"
     threads: 1
     shell:
-        "{PY} -m model.work_precision --out {RESULTS}/accuracy > {log} 2>&1"
+        "{PY:q} -m model.work_precision --out {params.out:q} > {log:q} 2>&1"
 
 
 rule batched_cost:
@@ -37,6 +39,8 @@ rule batched_cost:
             caption="../report/batched_cost.rst",
             category="Accuracy and cost",
         ),
+    params:
+        out=f"{RESULTS}/accuracy",
     resources:
         runtime=COST_BATCHED_COST.runtime,
         mem_mb=COST_BATCHED_COST.mem_mb,
@@ -46,7 +50,7 @@ rule batched_cost:
         f"{RESULTS}/benchmarks/accuracy/batched_cost.tsv"
     threads: 1
     shell:
-        "OMP_NUM_THREADS=1 {PY} -m model.batched_benchmark --out {RESULTS}/accuracy > {log} 2>&1"
+        "OMP_NUM_THREADS=1 {PY:q} -m model.batched_benchmark --out {params.out:q} > {log:q} 2>&1"
 
 
 rule calibration_cost:
@@ -60,11 +64,14 @@ rule calibration_cost:
         ),
         params=f"{RESULTS}/accuracy/calibration_cost_params.csv",
     params:
-        protocol_sets=" ".join(
-            f"--protocol-set {name}={','.join(spec['protocols'])}"
+        protocol_sets=[
+            word
             for name, spec in config.get("calibration", {}).get("sets", {}).items()
             if "protocols" in spec and set(spec) == {"protocols"}
-        ),
+            for word in ("--protocol-set", f"{name}={','.join(spec['protocols'])}")
+        ],
+        results=RESULTS,
+        out=f"{RESULTS}/accuracy",
     resources:
         runtime=COST_CALIBRATION_COST.runtime,
         mem_mb=COST_CALIBRATION_COST.mem_mb,
@@ -74,8 +81,8 @@ rule calibration_cost:
         f"{RESULTS}/benchmarks/accuracy/calibration_cost.tsv"
     threads: 1
     shell:
-        "OMP_NUM_THREADS=1 {PY} -m calibrate.cost_benchmark --results {RESULTS} --out {RESULTS}/accuracy"
-        " {params.protocol_sets} > {log} 2>&1"
+        "OMP_NUM_THREADS=1 {PY:q} -m calibrate.cost_benchmark --results {params.results:q} --out {params.out:q}"
+        " {params.protocol_sets:q} > {log:q} 2>&1"
 
 
 # The DEM stage against bare YADE (tools/stage_benchmark.py): paired runs of one pre-shear of a
@@ -98,8 +105,8 @@ rule stage_overhead:
         f"{RESULTS}/benchmarks/accuracy/stage_overhead.tsv"
     threads: 1
     shell:
-        "OMP_NUM_THREADS=1 YADE_LAUNCHER={YADE} python3 tools/stage_benchmark.py --out {output.table}"
-        " --sampling {params.sampling:q} --run {params.run:q} > {log} 2>&1"
+        "OMP_NUM_THREADS=1 YADE_LAUNCHER={YADE:q} python3 tools/stage_benchmark.py --out {output.table:q}"
+        " --sampling {params.sampling:q} --run {params.run:q} > {log:q} 2>&1"
 
 
 rule packing_cost:
@@ -126,8 +133,8 @@ rule packing_cost:
         f"{RESULTS}/benchmarks/accuracy/packing_cost.tsv"
     threads: 1
     shell:
-        "{PY} -m dem_study.packing_cost --campaign {params.campaign:q} --sidecars {input.sidecars}"
-        " --out {output} > {log} 2>&1"
+        "{PY:q} -m dem_study.packing_cost --campaign {params.campaign:q} --sidecars {input.sidecars:q}"
+        " --out {output:q} > {log:q} 2>&1"
 
 
 def accuracy_targets():

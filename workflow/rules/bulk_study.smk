@@ -61,7 +61,7 @@ rule bulk_study_dem:
         f"{RESULTS}/benchmarks/accuracy/bulk_study_dem.tsv"
     threads: 1
     shell:
-        "{PY} -m dem_study.bulk_cli cost --cases {input.cases} --bulk-dir {ACC_BULK} --out {output} > {log} 2>&1"
+        "{PY:q} -m dem_study.bulk_cli cost --cases {input.cases:q} --bulk-dir {ACC_BULK:q} --out {output:q} > {log:q} 2>&1"
 
 
 BULK = bulk_cells.settings(config)
@@ -85,8 +85,8 @@ rule bulk_vs_walls:
         ),
         summary=f"{RESULTS}/accuracy/bulk_vs_walls.json",
     params:
-        references=" ".join(BULK.get("references", [])),
-        tall=f"--tall-reference {BULK['tall_reference']}" if BULK.get("tall_reference") else "",
+        references=list(BULK.get("references", [])),
+        tall=["--tall-reference", BULK["tall_reference"]] if BULK.get("tall_reference") else [],
         steady_window=BULK["steady_window"],
         heaviside_strain=BULK["heaviside_strain"],
         transient_bin=BULK["transient_bin"],
@@ -101,12 +101,12 @@ rule bulk_vs_walls:
         f"{RESULTS}/benchmarks/accuracy/bulk_vs_walls.tsv"
     threads: 1
     shell:
-        "{PY} -m dem_study.bulk_cli analyse --cases {input.cases} --bulk-dir {ACC_BULK}"
-        " --out-table {output.table} --out-figure {output.figure} --out-summary {output.summary}"
-        " --references {params.references}"
-        " {params.tall} --steady-window {params.steady_window} --heaviside-strain {params.heaviside_strain}"
-        " --transient-bin {params.transient_bin} --early-strain {params.early_strain}"
-        " --match-se {params.match_se} > {log} 2>&1"
+        "{PY:q} -m dem_study.bulk_cli analyse --cases {input.cases:q} --bulk-dir {ACC_BULK:q}"
+        " --out-table {output.table:q} --out-figure {output.figure:q} --out-summary {output.summary:q}"
+        " --references {params.references:q}"
+        " {params.tall:q} --steady-window {params.steady_window:q} --heaviside-strain {params.heaviside_strain:q}"
+        " --transient-bin {params.transient_bin:q} --early-strain {params.early_strain:q}"
+        " --match-se {params.match_se:q} > {log:q} 2>&1"
 
 
 def bulk_study_targets():

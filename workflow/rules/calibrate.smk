@@ -3,9 +3,12 @@
 # protocols it learns from (the held-out comparisons use the others).
 
 
+from campaign import stage_options
 from campaign.calibration_sets import calibration_sets
 
 CALIBRATION_SETS = calibration_sets(config, CASES)  # name -> dict(cases, protocols)
+# calibration.options as words, each one argument of the command (campaign/stage_options.py)
+CALIBRATE_OPTIONS = stage_options.words(config, "calibration.options")
 
 
 # The {calset} wildcard of every rule (calibration, comparison): one of the campaign's sets
@@ -93,8 +96,8 @@ rule calibrate:
     params:
         dirs=lambda wc: [case_dir(label) for label in CALIBRATION_SETS[wc.calset]["cases"]],
         protocols=lambda wc: CALIBRATION_SETS[wc.calset]["protocols"],
-        options=config.get("calibration", {}).get("options", ""),
-        freeform="--freeform" if CALIBRATION_FREEFORM else "",
+        options=CALIBRATE_OPTIONS,
+        freeform=["--freeform"] if CALIBRATION_FREEFORM else [],
         out=lambda wc: f"{RESULTS}/calibration/{wc.calset}",
     priority: set_priority
     resources:
@@ -106,10 +109,10 @@ rule calibrate:
         f"{RESULTS}/benchmarks/calibration/{{calset}}.tsv"
     threads: 1
     shell:
-        "{PY} -m calibrate --dem {params.dirs} --protocols {params.protocols}"
-        " --out {params.out} {params.freeform} {params.options} > {log} 2>&1"
-        " && {{ test -e {output.heldout} || echo {HELDOUT_HEADER} > {output.heldout}; }}"
-        " && {{ test -e {output.freeform} || printf '{FREEFORM_NOT_ASKED}\\n' > {output.freeform}; }}"
+        "{PY:q} -m calibrate --dem {params.dirs:q} --protocols {params.protocols:q}"
+        " --out {params.out:q} {params.freeform:q} {params.options:q} > {log:q} 2>&1"
+        " && {{ test -e {output.heldout:q} || echo {HELDOUT_HEADER:q} > {output.heldout:q}; }}"
+        " && {{ test -e {output.freeform:q} || printf '%s\\n' {FREEFORM_NOT_ASKED:q} > {output.freeform:q}; }}"
 
 
 def calibration_targets():

@@ -64,8 +64,9 @@ rule claims:
         protocols=PROTOCOLS,
         sets=list(CALIBRATION_SETS),
         resamples=CLAIMS_RESAMPLES,
-        presets=" ".join(f"{name}={path}" for name, path in CLAIMS_PRESETS.items()),
-        freeform=f"--freeform {RESULTS}/calibration/all/freeform.csv" if CALIBRATION_FREEFORM else "",
+        presets=[f"{name}={path}" for name, path in CLAIMS_PRESETS.items()],
+        freeform=["--freeform", f"{RESULTS}/calibration/all/freeform.csv"] if CALIBRATION_FREEFORM else [],
+        out=CLAIMS,
     resources:
         runtime=COST_CLAIMS.runtime,
         mem_mb=COST_CLAIMS.mem_mb,
@@ -75,10 +76,10 @@ rule claims:
         f"{RESULTS}/benchmarks/claims/claims.tsv"
     threads: 1
     shell:
-        "{PY} -m claims --compare {COMPARE} --dem {params.dirs} --protocols {params.protocols}"
-        " --calibration {input.params}"
-        " --sets {params.sets} --resamples {params.resamples} --preset {params.presets} {params.freeform}"
-        " --out {CLAIMS} > {log} 2>&1"
+        "{PY:q} -m claims --compare {COMPARE:q} --dem {params.dirs:q} --protocols {params.protocols:q}"
+        " --calibration {input.params:q}"
+        " --sets {params.sets:q} --resamples {params.resamples:q} --preset {params.presets:q} {params.freeform:q}"
+        " --out {params.out:q} > {log:q} 2>&1"
 
 
 # The planner (python -m claims plan): for every claim the table leaves undecided, the seeds and
@@ -102,8 +103,8 @@ rule claims_plan:
         f"{RESULTS}/benchmarks/claims/claims_plan.tsv"
     threads: 1
     shell:
-        "{PY} -m claims plan --table {input.table} --dem {params.dirs} --protocols {params.protocols}"
-        " --out {output} > {log} 2>&1"
+        "{PY:q} -m claims plan --table {input.table:q} --dem {params.dirs:q} --protocols {params.protocols:q}"
+        " --out {output:q} > {log:q} 2>&1"
 
 
 def claims_targets():

@@ -9,6 +9,7 @@
 #   sensitivity_set: calibration set whose parameters are perturbed ("all")
 #   options: extra options of `compare predict` (e.g. "--zoom 0.05")
 
+from campaign import stage_options
 from campaign.scene_spec import protocol_segments
 from compare.cli import FIGURE_NAMES
 from dem_contract.derived import reversal_kinds
@@ -32,6 +33,8 @@ COMPARE_KINDS = protocol_kinds(PROTOCOLS)
 COMPARE_TABLES = ["errors", "claims"]
 COMPARE_CATEGORY = "Models against the DEM"
 SENSITIVITY_SET = config["compare"]["sensitivity_set"]
+# compare.options as words, each one argument of the command (campaign/stage_options.py)
+COMPARE_OPTIONS = stage_options.words(config, "compare.options")
 
 
 rule compare_predict:
@@ -65,7 +68,7 @@ rule compare_predict:
         train_cases=lambda wc: CALIBRATION_SETS[wc.calset]["cases"],
         train_protocols=lambda wc: CALIBRATION_SETS[wc.calset]["protocols"],
         out=lambda wc: f"{COMPARE}/{wc.calset}",
-        options=config.get("compare", {}).get("options", ""),
+        options=COMPARE_OPTIONS,
     resources:
         runtime=COST_COMPARE.runtime,
         mem_mb=COST_COMPARE.mem_mb,
@@ -75,10 +78,10 @@ rule compare_predict:
         f"{RESULTS}/benchmarks/compare/predict_{{calset}}.tsv"
     threads: 1
     shell:
-        "{PY} -m compare predict --dem {params.dirs} --params {input.params} --set {wildcards.calset}"
-        " --protocols {params.protocols} --train-cases {params.train_cases}"
-        " --train-protocols {params.train_protocols} --figures {params.kinds} --out {params.out} {params.options}"
-        " > {log} 2>&1"
+        "{PY:q} -m compare predict --dem {params.dirs:q} --params {input.params:q} --set {wildcards.calset:q}"
+        " --protocols {params.protocols:q} --train-cases {params.train_cases:q}"
+        " --train-protocols {params.train_protocols:q} --figures {params.kinds:q} --out {params.out:q}"
+        " {params.options:q} > {log:q} 2>&1"
 
 
 rule compare_heldout:
@@ -99,7 +102,7 @@ rule compare_heldout:
         f"{RESULTS}/benchmarks/compare/heldout.tsv"
     threads: 1
     shell:
-        "{PY} -m compare heldout --errors {input.errors} --out {output} > {log} 2>&1"
+        "{PY:q} -m compare heldout --errors {input.errors:q} --out {output:q} > {log:q} 2>&1"
 
 
 rule compare_sensitivity:
@@ -132,8 +135,8 @@ rule compare_sensitivity:
         f"{RESULTS}/benchmarks/compare/sensitivity_{SENSITIVITY_SET}.tsv"
     threads: 1
     shell:
-        "{PY} -m compare sensitivity --dem {params.dirs} --params {input.params} --set {SENSITIVITY_SET}"
-        " --protocols {params.protocols} --out {params.out} > {log} 2>&1"
+        "{PY:q} -m compare sensitivity --dem {params.dirs:q} --params {input.params:q} --set {SENSITIVITY_SET:q}"
+        " --protocols {params.protocols:q} --out {params.out:q} > {log:q} 2>&1"
 
 
 def compare_targets():

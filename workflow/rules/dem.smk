@@ -17,8 +17,8 @@ wildcard_constraints:
 # YADE as a library (no `yade -x`: no remote servers) and opens its own log only
 # once it holds the stage lock, so a refused run (exit 5) leaves the log alone.
 YADE_STAGE = (
-    "OMP_NUM_THREADS=1 YADE_LAUNCHER={YADE} python3 yade_scripts/run_stage.py"
-    " {input.scene} {params.stage} {params.case_dir} --log {log}"
+    "OMP_NUM_THREADS=1 YADE_LAUNCHER={YADE:q} python3 yade_scripts/run_stage.py"
+    " {input.scene:q} {params.stage:q} {params.case_dir:q} --log {log:q}"
 )
 
 
@@ -134,9 +134,9 @@ rule dem_summary:
             category="DEM campaign",
         ),
     params:
-        cases=" ".join(f"{label}={c['pressure']!r},{c['inertial_number']!r},{c['seed']}"
-                       for label, c in CASES.items()),
+        cases=[f"{label}={c['pressure']!r},{c['inertial_number']!r},{c['seed']}" for label, c in CASES.items()],
         stages=["pack", "preshear", *PROTOCOLS],
+        dem=f"{RESULTS}/dem",
     resources:
         runtime=COST_SMALL.runtime,
         mem_mb=COST_SMALL.mem_mb,
@@ -146,5 +146,5 @@ rule dem_summary:
         f"{RESULTS}/benchmarks/dem/summary.tsv"
     threads: 1
     shell:
-        "{PY} -m campaign.summary --dem {RESULTS}/dem --cases {params.cases} --stages {params.stages}"
-        " --out {output} > {log} 2>&1"
+        "{PY:q} -m campaign.summary --dem {params.dem:q} --cases {params.cases:q} --stages {params.stages:q}"
+        " --out {output:q} > {log:q} 2>&1"

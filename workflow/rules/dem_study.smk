@@ -81,7 +81,8 @@ rule dem_study:
         summary=f"{RESULTS}/accuracy/dem_study.json",
     params:
         campaign_I=sorted({case["inertial_number"] for case in CASES.values()}),
-        tolerance=" ".join(f"{k}={v}" for k, v in ACCURACY["tolerance"].items()),
+        tolerance=[f"{k}={v}" for k, v in ACCURACY["tolerance"].items()],
+        out=f"{RESULTS}/accuracy",
         steady_window=ACCURACY["steady_window"],
         heaviside_strain=ACCURACY["heaviside_strain"],
         transient_bin=ACCURACY["transient_bin"],
@@ -95,8 +96,8 @@ rule dem_study:
         f"{RESULTS}/benchmarks/accuracy/dem_study.tsv"
     threads: 1
     shell:
-        "{PY} -m dem_study analyse --points {input.points} --dem-dir {ACC_DEM} --out {RESULTS}/accuracy"
-        " --steady-window {params.steady_window} --heaviside-strain {params.heaviside_strain}"
-        " --transient-bin {params.transient_bin} --campaign-I {params.campaign_I}"
-        " --quasi-static-tolerance {params.quasi_static_tolerance}"
-        " --tolerance {params.tolerance} > {log} 2>&1"
+        "{PY:q} -m dem_study analyse --points {input.points:q} --dem-dir {ACC_DEM:q} --out {params.out:q}"
+        " --steady-window {params.steady_window:q} --heaviside-strain {params.heaviside_strain:q}"
+        " --transient-bin {params.transient_bin:q} --campaign-I {params.campaign_I:q}"
+        " --quasi-static-tolerance {params.quasi_static_tolerance:q}"
+        " --tolerance {params.tolerance:q} > {log:q} 2>&1"

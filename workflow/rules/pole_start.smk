@@ -4,16 +4,8 @@
 #   results/calibration/<set>/pole_start.yaml, pole_start_profile.csv   (calibrate.pole_start)
 #   results/compare/<set>/pole_start_predictions.csv, pole_start_errors.csv  (compare.pole_start)
 #   results/claims/pole_start.csv: claim 4's statistic, the variant against Model 1 and Model 2
-# The fit's budget follows the calibration options (--route2-evals, --profile-points).
-
-import re
-
-POLE_OPTIONS = config.get("calibration", {}).get("options", "")
-
-
-def _pole_option(name, default):
-    m = re.search(rf"--{name}[ =](\d+)", POLE_OPTIONS)
-    return int(m.group(1)) if m else default
+# The fit's budget follows the calibration options (--route2-evals, --profile-points), read from
+# the words calibrate itself gets (CALIBRATE_OPTIONS, calibrate.smk; campaign/stage_options.py).
 
 
 rule pole_start_calibrate:
@@ -30,8 +22,8 @@ rule pole_start_calibrate:
     params:
         dirs=lambda wc: [case_dir(label) for label in CALIBRATION_SETS[wc.calset]["cases"]],
         protocols=lambda wc: CALIBRATION_SETS[wc.calset]["protocols"],
-        evals=_pole_option("route2-evals", 300),
-        points=_pole_option("profile-points", 10),
+        evals=stage_options.given_int(CALIBRATE_OPTIONS, "--route2-evals", 300),
+        points=stage_options.given_int(CALIBRATE_OPTIONS, "--profile-points", 10),
     priority: set_priority
     resources:
         runtime=COST_CALIBRATE.runtime,
@@ -42,8 +34,8 @@ rule pole_start_calibrate:
         f"{RESULTS}/benchmarks/calibration/pole_start_{{calset}}.tsv"
     threads: 1
     shell:
-        "{PY} -m calibrate.pole_start --dem {params.dirs} --params {input.params} --protocols {params.protocols}"
-        " --max-evals {params.evals} --profile-points {params.points} --out {output.fit} > {log} 2>&1"
+        "{PY:q} -m calibrate.pole_start --dem {params.dirs:q} --params {input.params:q} --protocols {params.protocols:q}"
+        " --max-evals {params.evals:q} --profile-points {params.points:q} --out {output.fit:q} > {log:q} 2>&1"
 
 
 rule pole_start_compare:
@@ -68,9 +60,9 @@ rule pole_start_compare:
         f"{RESULTS}/benchmarks/compare/pole_start_{{calset}}.tsv"
     threads: 1
     shell:
-        "{PY} -m compare.pole_start --dem {params.dirs} --fit {input.fit} --set {wildcards.calset}"
-        " --protocols {params.protocols} --train-cases {params.train_cases}"
-        " --train-protocols {params.train_protocols} --out {params.out} > {log} 2>&1"
+        "{PY:q} -m compare.pole_start --dem {params.dirs:q} --fit {input.fit:q} --set {wildcards.calset:q}"
+        " --protocols {params.protocols:q} --train-cases {params.train_cases:q}"
+        " --train-protocols {params.train_protocols:q} --out {params.out:q} > {log:q} 2>&1"
 
 
 rule pole_start_claims:
@@ -93,8 +85,8 @@ rule pole_start_claims:
         f"{RESULTS}/benchmarks/claims/pole_start.tsv"
     threads: 1
     shell:
-        "{PY} -m claims.pole_start --compare {COMPARE} --sets {params.sets} --resamples {params.resamples}"
-        " --out {output} > {log} 2>&1"
+        "{PY:q} -m claims.pole_start --compare {COMPARE:q} --sets {params.sets:q} --resamples {params.resamples:q}"
+        " --out {output:q} > {log:q} 2>&1"
 
 
 def pole_start_targets():

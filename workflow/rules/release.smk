@@ -57,6 +57,7 @@ if RELEASED:
             case="|".join(re.escape(label) for label in RELEASED),
         params:
             release=lambda wc: RELEASED[wc.case],
+            out=lambda wc: f"{RESULTS}/dem/{wc.case}",
         resources:
             runtime=COST_SMALL.runtime,
             mem_mb=COST_SMALL.mem_mb,
@@ -66,8 +67,8 @@ if RELEASED:
             f"{RESULTS}/benchmarks/dem/{{case}}/release.tsv"
         localrule: True
         shell:
-            "{PY} -m dem_contract restore --release {params.release} --case {wildcards.case}"
-            " --out {RESULTS}/dem/{wildcards.case} > {log} 2>&1"
+            "{PY:q} -m dem_contract restore --release {params.release:q} --case {wildcards.case:q}"
+            " --out {params.out:q} > {log:q} 2>&1"
 
     ruleorder: release_case > scene
     ruleorder: release_case > dem_pack
@@ -88,6 +89,7 @@ if BULK_RELEASED:
             bulkcase="|".join(re.escape(label) for label in BULK_RELEASED),
         params:
             release=lambda wc: BULK_RELEASED[wc.bulkcase],
+            out=lambda wc: f"{RESULTS}/accuracy/bulk/{wc.bulkcase}",
         resources:
             runtime=COST_SMALL.runtime,
             mem_mb=COST_SMALL.mem_mb,
@@ -97,8 +99,8 @@ if BULK_RELEASED:
             f"{RESULTS}/benchmarks/accuracy/bulk/{{bulkcase}}/release.tsv"
         localrule: True
         shell:
-            "{PY} -m dem_contract restore --release {params.release} --case {wildcards.bulkcase}"
-            " --out {RESULTS}/accuracy/bulk/{wildcards.bulkcase} > {log} 2>&1"
+            "{PY:q} -m dem_contract restore --release {params.release:q} --case {wildcards.bulkcase:q}"
+            " --out {params.out:q} > {log:q} 2>&1"
 
     ruleorder: release_bulk_case > bulk_study_scene
     ruleorder: release_bulk_case > bulk_study_pack
