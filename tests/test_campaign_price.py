@@ -20,7 +20,7 @@ DECIDE = yaml.safe_load((ROOT / "config" / "bulk_decide.yaml").read_text())
 
 
 def write(tmp_path, config, name="campaign.yaml"):
-    config = {**config, "results_dir": str(tmp_path / "results")}
+    config = {**config, "results_dir": str(tmp_path / "results"), "allow_outside_tree": True}
     path = tmp_path / name
     path.write_text(yaml.safe_dump(config, sort_keys=False))
     return path

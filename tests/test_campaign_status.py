@@ -31,7 +31,8 @@ PACK_STEPS = 29140          # a real pack of this cell (seed 1 at kappa 1e4)
 
 
 def config_for(tmp_path, base=STIFF):
-    config = with_defaults(json.loads(json.dumps({**base, "results_dir": str(tmp_path / "results")})))
+    config = with_defaults(json.loads(json.dumps({**base, "results_dir": str(tmp_path / "results"),
+                                                  "allow_outside_tree": True})))
     path = tmp_path / "campaign.yaml"
     path.write_text(yaml.safe_dump(config, sort_keys=False))
     return config, path
