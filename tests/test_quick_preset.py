@@ -31,10 +31,12 @@ def code_benchmarks(module_workflow_dir):
 
 
 def bench_command():
-    """The arguments of the Makefile's `bench` recipe after `snakemake`, its variables expanded."""
+    """The arguments of the Makefile's `bench` recipe after `snakemake` (its Snakemake line; the pre-flight
+    comes first), its variables expanded."""
     text = (ROOT / "Makefile").read_text()
     variables = dict(re.findall(r"^(\w+)\s*:=\s*(.*)$", text, re.M))
-    recipe = re.search(r"^bench:.*\n\t(.*)$", text, re.M).group(1)
+    lines = re.search(r"^bench:.*\n((?:\t.*\n?)+)", text, re.M).group(1).splitlines()
+    recipe = next(line.strip() for line in lines if "/snakemake " in line)
     recipe = re.sub(r"\$\((\w+)\)", lambda m: variables[m.group(1)], recipe)
     words = shlex.split(recipe)
     return words[words.index(next(w for w in words if w.endswith("snakemake"))) + 1:]
