@@ -2,9 +2,10 @@ r"""A release's published tables against a recomputation from the release (docs/
 
 A release keeps, in ``published/``, tables its campaign's run wrote (the claims,
 the calibration's parameter table, ...). Recomputed from the release alone
-(no YADE), the same code gives the same tables; a change of the code's float
-path moves their numbers in the last digits. ``compare`` holds a recomputation
-to the published tables:
+(no YADE), the code gives the same verdicts and nearly the same numbers: a
+change of its float path, and the free-form fit's scatter from run to run
+(below), move them in the last digits. ``compare`` holds a recomputation to
+the published tables:
 
 - rows are matched by their key columns (``TABLE_KEYS``); every published row
   and column must be in the recomputation (a missing one is named), while rows
@@ -46,7 +47,7 @@ from pathlib import Path
 import pandas as pd
 import yaml
 
-from .release import MANIFEST, PUBLISHED_DIR, _git, checksum_problems, read_manifest, sha256
+from .release import MANIFEST, PUBLISHED_DIR, checksum_problems, git_output, read_manifest, sha256
 from .series import DEMInputError
 
 #: Relative tolerance for numbers that are not integers (module docstring).
@@ -210,7 +211,7 @@ def republish(release, results, command: str, reason: str) -> list:
         manifest["files"][str(published.relative_to(release))] = {"sha256": sha256(published),
                                                                    "bytes": published.stat().st_size}
     manifest["total_bytes"] = sum(f["bytes"] for f in manifest["files"].values())
-    commit = _git("rev-parse", "HEAD", cwd=Path(__file__).resolve().parents[1])
+    commit = git_output("rev-parse", "HEAD", cwd=Path(__file__).resolve().parents[1])
     manifest.setdefault("republished", []).append({
         "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
         "code_commit": commit, "command": command, "reason": reason, "tables": sorted(p.name for p in tables)})

@@ -99,7 +99,8 @@ def pre_tail_rows(n_pre: int, n_run: int) -> int:
     return min(n_pre, max(11, -(-n_run // 9) + 2))
 
 
-def _git(*args, cwd) -> str:
+def git_output(*args, cwd) -> str:
+    """``git *args`` in ``cwd``: its output, stripped, or ``"unknown"`` without git or a repository."""
     try:
         return subprocess.run(["git", *args], cwd=cwd, capture_output=True, text=True, check=True).stdout.strip()
     except (OSError, subprocess.CalledProcessError):
@@ -264,12 +265,12 @@ def make_release(case_dirs, out, config, command: str, with_states: bool = False
     manifest = {
         "release": out.name,
         "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
-        "code_commit": _git("rev-parse", "HEAD", cwd=repo),
+        "code_commit": git_output("rev-parse", "HEAD", cwd=repo),
         # tracked files differing from the commit, but for this release's own folder (remade: deleted first)
-        "code_dirty": bool(_git("status", "--porcelain", "--untracked-files=no", "--", ".",
+        "code_dirty": bool(git_output("status", "--porcelain", "--untracked-files=no", "--", ".",
                                 *excluded_from_status(out, repo), cwd=repo)),
         # the last commit that changed the DEM's code (the YADE scene and stages, the config -> scene mapping)
-        "dem_code_commit": _git("log", "-1", "--format=%H", "--", *DEM_CODE, cwd=repo),
+        "dem_code_commit": git_output("log", "-1", "--format=%H", "--", *DEM_CODE, cwd=repo),
         "yade_version": yade[0] if len(yade) == 1 else yade,
         "states": with_states,
         "regenerate": {
@@ -419,5 +420,6 @@ def case_files(release, label) -> list:
     return sorted(str(p) for p in (Path(release) / CASES_DIR / label).rglob("*") if p.is_file())
 
 
-__all__ = ["DEMInputError", "MANIFEST", "sha256", "write_csv_gz", "case_protocols", "make_release", "read_manifest",
-           "checksum_problems", "require_intact", "restore_case", "verify", "released_cases", "release_bytes", "case_files"]
+__all__ = ["DEMInputError", "MANIFEST", "sha256", "git_output", "write_csv_gz", "case_protocols", "make_release",
+           "read_manifest", "checksum_problems", "require_intact", "restore_case", "verify", "released_cases",
+           "release_bytes", "case_files"]
