@@ -85,7 +85,7 @@ def test_the_workflow_refuses_an_edited_release_while_it_is_parsed_naming_the_fi
     the untouched copy is planned as released (its case restored, not run)."""
     folder = one_case_release(tmp_path / "release")
     args = ["--configfile", "config/bulk_decide.yaml", "--config", f"results_dir={tmp_path / 'results'}",
-            f"release={folder}"]
+            f"release={folder}", "allow_outside_tree=True"]   # pytest's tmp_path
     plan = dry_run(*args, cwd=workflow_dir)
     assert plan.returncode == 0 and "release_case" in plan.stdout, plan.stderr[-3000:]
     edited = edit_one_A_xy_value(folder)
