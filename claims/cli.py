@@ -4,8 +4,10 @@ r"""Command line of the claims stage.
 
     python -m claims --compare results/compare --dem results/dem/<case> ... [--protocols heaviside sinusoidal ...] \
         [--calibration results/calibration/all/params.yaml] [--sets all heaviside_only ...] \
-        [--resamples 2000] [--seed 0] [--preset paper=config/config.yaml ...] --out results/claims
+        [--resamples 2000] [--seed 0] [--preset paper=config/config.yaml ...] [--pole-start] --out results/claims
         # -> paper_claims.csv, paper_claims.png, power.csv, README_section.md
+        # --pole-start: every set's pole_start_predictions.csv too (python -m compare.pole_start): the rows of
+        #   the paper's configuration of Model 1 (4-start-step, 4-start-sin)
     python -m claims plan --table results/claims/paper_claims.csv --dem results/dem/<case> ... \
         [--protocols heaviside sinusoidal ...] --out results/claims/plan.csv
         # -> seeds and core-hours that decide every undecided claim (claims.plan)
@@ -22,7 +24,7 @@ from pathlib import Path
 
 from dem_contract import REVERSAL_PROTOCOLS, DEMInputError
 
-from . import design, inputs, plan, power, report, table
+from . import design, inputs, plan, pole_start, power, report, table
 
 
 def build_parser():
@@ -41,6 +43,9 @@ def build_parser():
     ap.add_argument("--seed", type=int, default=0, help="random seed of the bootstrap")
     ap.add_argument("--preset", nargs="*", default=[], metavar="NAME=CONFIG",
                     help="presets whose power the README section states, e.g. paper=config/config.yaml")
+    ap.add_argument("--pole-start", action="store_true",
+                    help="read every set's pole_start_predictions.csv too: rows 4-start-* (Model 1 with its pole "
+                         "at each reversal's start, the paper's configuration)")
     ap.add_argument("--out", required=True, help="output folder, e.g. results/claims")
     return ap
 
@@ -63,7 +68,8 @@ def main(argv=None) -> int:
             raise ValueError(f"--resamples = {args.resamples}: must be at least 100")
         out = Path(args.out)
         out.mkdir(parents=True, exist_ok=True)
-        pred = inputs.read_comparison(args.compare, args.sets)
+        pred = (pole_start.read_variant(args.compare, args.sets) if args.pole_start
+                else inputs.read_comparison(args.compare, args.sets))
         dem_cases = [inputs.read_dem_case(d, args.protocols) for d in args.dem]
         params = Path(args.calibration) if args.calibration else Path(args.compare).parent / "calibration" / "all" / "params.yaml"
         ff = inputs.read_freeform(args.freeform) if args.freeform else None
