@@ -276,3 +276,43 @@ def test_claim_6_with_one_model_inside_the_band_is_decided_by_the_comparison():
     row = table.width_row(runs, table.Bootstrap(400))
     assert row["verdict"] == "reproduced" and "Model 2 outside" in row["adequacy"]
     assert not row["adequacy"].startswith("Model 1 outside")      # one model not outside: the comparison decides
+
+
+# --------------------------------------------------------------------------- Eq. 2 against the paper as curves
+
+
+def eq2_cases(rng, params, seeds=4, n=400, noise=0.01):
+    """DEM-like reversal samples whose signed stress ratio is Eq. 2 with ``params`` plus noise."""
+    from claims.inputs import DemCase
+    from model.laws import stress_ratio_eq2
+    cases = []
+    for i in range(seeds):
+        X = rng.uniform(-0.12, 0.09, n)
+        g = np.where(rng.random(n) < 0.5, 1.0, -1.0)
+        A_xy = X / (np.sqrt(2.0) * g)
+        tau = stress_ratio_eq2(X, **params) + rng.normal(0, noise, n)
+        samples = pd.DataFrame({"protocol": "heaviside", "kind": "heaviside", "reversal": 1, "X": X,
+                                "mu": np.abs(tau), "A_xy": A_xy, "stress_ratio": g * tau})
+        cases.append(DemCase(label=f"{GROUP}_s{i + 1}", group=GROUP, steady={}, samples=samples))
+    return cases
+
+
+def test_data_made_by_the_papers_eq2_lie_on_its_curve_and_keep_its_k5():
+    from claims import eq2
+    tab = eq2.eq2_table(eq2_cases(np.random.default_rng(12), eq2.PAPER))
+    cur = tab[tab["section"] == "curve"]
+    assert cur["paper_inside"].mean() > 0.5         # a pointwise 90 % band of 4 seeds, one draw
+    assert (cur["paper"] - cur["value"]).abs().max() < 0.01
+    prof = tab[tab["section"] == "k5_profile"].set_index("k5")
+    assert prof.loc[eq2.PAPER["k5"], "value"] < 1.01 < prof.loc[0.0, "value"]      # 9e4 fits, 0 does not
+
+
+def test_data_made_without_a_fifth_order_term_say_how_much_9e4_costs():
+    from claims import eq2
+    cases = eq2_cases(np.random.default_rng(13), dict(X0=0.032, k1=2.2, k3=4.0, k5=0.0))
+    tab = eq2.eq2_table(cases)
+    cur = tab[tab["section"] == "curve"]
+    assert cur["paper_inside"].mean() < 0.3 and (cur["paper"] - cur["value"]).abs().max() > 0.03
+    prof = tab[tab["section"] == "k5_profile"].set_index("k5")
+    assert prof.loc[0.0, "value"] == pytest.approx(1.0, abs=0.01) and prof.loc[eq2.PAPER["k5"], "low"] > 1.02
+    assert "times the free fit's" in eq2.summary(tab, table.EQ2_MARGIN)

@@ -63,6 +63,12 @@ rule claims:
             caption="../report/reversal_design.rst",
             category=CLAIMS_CATEGORY,
         ),
+        eq2=f"{CLAIMS}/eq2_vs_paper.csv",
+        eq2_figure=report(
+            f"{CLAIMS}/eq2_vs_paper.png",
+            caption="../report/eq2_vs_paper.rst",
+            category=CLAIMS_CATEGORY,
+        ),
     params:
         dirs=[case_dir(label) for label in CASES],
         protocols=PROTOCOLS,
