@@ -90,8 +90,8 @@ def main(argv=None) -> int:
         curves = eq2.eq2_table(dem_cases, eq2_all)
         curves.to_csv(out / "eq2_vs_paper.csv", index=False, float_format="%.6g")
         eq2.figure(curves, out / "eq2_vs_paper.png")
-        section += "\n### Eq. 2 against the paper\n\n" + eq2.summary(curves, table.EQ2_MARGIN) + " (`eq2_vs_paper.csv`, " \
-            "`eq2_vs_paper.png`, `claims/eq2.py`)\n"
+        section += ("\n### Eq. 2 against the paper\n\n" + eq2.summary(curves, table.EQ2_MARGIN)
+                    + " (`eq2_vs_paper.csv`, `eq2_vs_paper.png`, `claims/eq2.py`)\n")
         (out / "README_section.md").write_text(section)
     except (DEMInputError, ValueError) as exc:
         print(f"claims: error: {exc}", file=sys.stderr)

@@ -6,7 +6,8 @@ out of sample, of the paired difference of squared model errors
 .. math:: d = \mathrm{MSE}_{M1} - \mathrm{MSE}_{M2}
 
 of :math:`|A|` over the first ``table.EARLY_A`` strain after the reversal
-(``table.early_scores``; the DEM's noise floor cancels from it, ``claims.ensemble``). A campaign that runs several reversal
+(``table.early_scores``; the DEM's noise floor cancels from it, ``claims.ensemble``).
+A campaign that runs several reversal
 protocols per seed (a single reversal, a train of reversals spaced 0.3 strain,
 one spaced 0.5, ...) measures every design on the same seeds. For each protocol
 :math:`p` this module computes, over the seeds:

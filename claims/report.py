@@ -79,6 +79,12 @@ def _num(x):
     return "" if not (isinstance(x, (int, float)) and math.isfinite(x)) else f"{x:.3g}"
 
 
+def _adequacy(row) -> str:
+    """The row's adequacy cell ('' where the claim compares no two models)."""
+    a = str(row.get("adequacy", ""))
+    return "" if a == "nan" else a.replace("|", "\\|")
+
+
 def markdown_section(table, title="The paper's claims, decided", source="") -> str:
     """A Markdown section: the decision rule, a summary line and one table row per claim."""
     counts = verdict_counts(table["verdict"])
@@ -96,7 +102,7 @@ def markdown_section(table, title="The paper's claims, decided", source="") -> s
         lines.append(f"| {r['claim_id']} | {cell(r['claim'])} ({cell(r['source'])}) | {cell(r['statistic'])}"
                      f"{'; ' + cell(r['detail']) if str(r['detail']) not in ('', 'nan') else ''} | {cell(interval)} | "
                      f"{r['paper_side']} {_num(r['null'])} | {margin} | {cell(r['test'])} | {r['n']} "
-                     f"{cell(r['n_unit'])} | {cell(r.get('adequacy', '')) if str(r.get('adequacy', '')) != 'nan' else ''} | "
+                     f"{cell(r['n_unit'])} | {_adequacy(r)} | "
                      f"**{r['verdict']}** |")
     return "\n".join(lines) + "\n"
 

@@ -44,8 +44,8 @@ def frame(case, protocol, kind, source, norm):
     a = -np.asarray(norm) / np.sqrt(2.0)          # theta_A = 90 degrees: A_xy = 0, |A| = sqrt2 |A_xx|
     b = np.zeros_like(a)
     return pd.DataFrame(dict(set="fold", case=case, group=GROUP, seed=int(case.rsplit("s", 1)[1]), protocol=protocol,
-                             source=source, s_rev=S, A_xx=a, A_xy=b, A_norm=np.asarray(norm), theta_A=fabric_angle_deg(a, b),
-                             mu=0.3, in_sample=False, kind=kind))
+                             source=source, s_rev=S, A_xx=a, A_xy=b, A_norm=np.asarray(norm),
+                             theta_A=fabric_angle_deg(a, b), mu=0.3, in_sample=False, kind=kind))
 
 
 def campaign(rng, seeds, offsets: dict, draws=1):
