@@ -585,17 +585,19 @@ FREEFORM_LAWS = ("freeform", "model1", "model2")
 def freeform_scores(ff: pd.DataFrame, dem: dict) -> list:
     """Claim 9's runs as ``early_scores`` gives them, from ``freeform.csv``'s ``heldout`` rows.
 
-    Each row is one held-out run's early MSE of |A| for one law (key ``<law>|<case>/<protocol>``; the window
-    after the run's first reversal). The run's kind and noise floor are those of its first reversal's
-    position in the comparison's DEM curves (``<protocol>`` or ``<protocol>_r1``).
+    Each row is one held-out run's early MSE of |A| for one law (key ``<law>|<case>/<run>``; the window
+    after the run's first reversal). The run's kind and noise floor are those of its reversal position in
+    the comparison's DEM curves: the run itself (``train03_r2``: the calibration replays every reversal of
+    a train as a run) or a protocol's first reversal (``train03`` -> ``train03_r1``).
     """
     held = ff[ff["section"] == "heldout"]
     floors = ensemble.noise_floors(dem, "A_norm", EARLY_A)
-    first = {}
-    for case, group, proto in dem:
+    position = {}        # (case, run) -> (group, position): the run is a position (train03_r2), or a
+    for case, group, proto in dem:     # protocol whose first reversal is (train03 -> train03_r1)
+        position[(case, proto)] = (group, proto)
         base, _, r = proto.partition("_r")
-        if proto == base or r == "1":
-            first[(case, base)] = (group, proto)
+        if r == "1":
+            position.setdefault((case, base), (group, proto))
     mse = {}
     for key, value in zip(held["key"], held["value"]):
         law, _, run = str(key).partition("|")
@@ -603,9 +605,9 @@ def freeform_scores(ff: pd.DataFrame, dem: dict) -> list:
         mse.setdefault((case, proto), {})[law] = float(value)
     out = []
     for (case, proto), m in sorted(mse.items()):
-        if (case, proto) not in first or not all(law in m for law in FREEFORM_LAWS):
+        if (case, proto) not in position or not all(law in m for law in FREEFORM_LAWS):
             continue
-        group, pos = first[(case, proto)]
+        group, pos = position[(case, proto)]
         floor = floors.get((group, pos))
         out.append(dict(key=("leave-one-seed-out", case, group, pos, False), kind=kind_of(dem[(case, group, pos)]),
                         floor=floor.mean if floor else math.nan, mse=m))
