@@ -37,10 +37,12 @@ of the run's noise). So
 
 Crossings (claims 3 and 5). The A_xx where A_xy first changes sign
 (``dem_contract.passage``) is judged per run against the pooled
-seed-to-seed scatter of the crossings of the same position
-(``crossing_scatter``): it holds every source of noise at the crossing (the
-fabric's, the crossing's location), measured where the crossing is, not on
-the run's tail, and a real difference between seeds only makes it larger
+seed-to-seed scatter of the other runs' crossings at the same positions
+(``crossing_z``, leave one out): it holds every source of noise at the
+crossing (the fabric's, the crossing's location), measured where the
+crossing is, not on the run's tail (whose smoothed, coarsely sampled noise
+is about half the crossing's at the DEM's sampling: a z of s.d. about 2
+under no effect), and a real difference between seeds only makes it larger
 (the tests conservative).
 """
 from __future__ import annotations
