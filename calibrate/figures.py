@@ -71,7 +71,7 @@ def fig3(bins, which, m1: dict, m2: dict, path, free=None):
 
     ``m1`` and ``m2`` map a route label to the block's values. ``free`` (optional,
     ``freeform.curves_for_figure``): the free-form fit, drawn with its band of
-    +-1.96 jackknife standard errors over seeds.
+    +-t_{n-1} jackknife standard errors over the n seeds (``free["t"]``).
     """
     col = f"alpha{which}"
     fig, ax = plt.subplots(figsize=(5.5, 4))
@@ -99,7 +99,8 @@ def fig3(bins, which, m1: dict, m2: dict, path, free=None):
         y, se = free[col], free[f"se{which}"]
         ax.plot(free["X"], y, "-", lw=2, color="tab:green", label=free["label"])
         if np.isfinite(se).any():
-            ax.fill_between(free["X"], y - 1.96 * se, y + 1.96 * se, color="tab:green", alpha=0.2, lw=0)
+            k = free["t"]
+            ax.fill_between(free["X"], y - k * se, y + k * se, color="tab:green", alpha=0.2, lw=0)
     used = bins[bins["used"]]
     if len(used):
         lo, hi = np.nanpercentile(used[col], [2, 98])

@@ -35,12 +35,17 @@ by the three laws calibrated without its seed: paired errors per run, averaged
 per seed, with a bootstrap interval over seeds (``shared_stats.mean_interval``).
 
 Scores per held-out run: RMS error of |A| over the first ``early_strain`` of
-path strain after the first reversal (the claims table's window), and of
-|A|, theta_A (degrees, axial) and the signed friction over the whole run.
+path strain after the first reversal (the claims table's window) and its
+square (``early_A_mse``: the claims difference it per run, where the DEM's
+noise cancels; ``freeform.csv`` keeps it per run, section ``heldout``), and
+the RMS errors of |A|, theta_A (degrees, axial) and the signed friction over
+the whole run.
 
 Band: the leave-one-seed-out fits at the chosen :math:`\lambda` are a
-jackknife; the band is the full fit :math:`\pm 1.96` jackknife standard errors,
-:math:`\mathrm{se}^2 = \frac{n-1}{n}\sum_j (\hat\alpha_{(j)} - \bar\alpha)^2`.
+jackknife; the band is the full fit :math:`\pm t_{0.975,\,n-1}` jackknife standard
+errors, :math:`\mathrm{se}^2 = \frac{n-1}{n}\sum_j (\hat\alpha_{(j)} - \bar\alpha)^2`
+(``t95``: Student's t of the n seeds, not the normal 1.96: with 5 seeds it is
+2.78).
 
 Pole: the bend of each alpha at the largest X visited beyond its tangent at
 X = 0, :math:`e_i = \alpha_i(X_{hi}) - \alpha_i(0) - \alpha_i'(0) X_{hi}`
@@ -57,6 +62,7 @@ from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 import pandas as pd
+from scipy import stats
 from scipy.optimize import least_squares
 
 from dem_contract import angle_difference, fabric_angle_deg, fabric_norm
@@ -66,9 +72,13 @@ from shared_stats import early_rmse, mean_interval
 
 from . import fits, route2, shear_stability
 
-SCORES = ("early_A_norm", "A_norm", "theta_A", "mu")
+SCORES = ("early_A_norm", "early_A_mse", "A_norm", "theta_A", "mu")
 LAWS = ("freeform", "model1", "model2")
-Z95 = 1.959963984540054
+
+
+def t95(n: int) -> float:
+    r"""Student's :math:`t_{0.975,\,n-1}` of a jackknife over ``n`` seeds (NaN for n < 2)."""
+    return float(stats.t.ppf(0.975, n - 1)) if n >= 2 else math.nan
 
 
 @dataclass(frozen=True)
@@ -228,7 +238,8 @@ def run_errors(c, replay, early_strain: float) -> dict:
     dth = angle_difference(fabric_angle_deg(c[:, 0], c[:, 1]), fabric_angle_deg(replay.a, replay.b))
     rms = lambda v: float(np.sqrt(np.mean(v**2))) if v.size else math.nan  # noqa: E731
     early = early_rmse(replay.s, dem_A, model_A, early_strain, start=reversal_strain(replay))
-    return {"early_A_norm": early, "A_norm": rms(model_A - dem_A), "theta_A": rms(dth), "mu": rms(c[:, 2] - replay.mu)}
+    return {"early_A_norm": early, "early_A_mse": early ** 2, "A_norm": rms(model_A - dem_A), "theta_A": rms(dth),
+            "mu": rms(c[:, 2] - replay.mu)}
 
 
 def _heldout(items, held, s2, sigma_mu, early_strain) -> list:
@@ -378,8 +389,9 @@ def note_table(note: str) -> pd.DataFrame:
 def table(res: dict, settings: FreeformSettings) -> pd.DataFrame:
     """``freeform.csv``: breaks, coefficients, CV scores, paired held-out scores and the pole bends.
 
-    Columns: ``section`` (breaks, coefficients, cv, score, difference, pole), ``key``, ``value``,
-    ``low``, ``high`` (95 %), ``n`` (seeds, or samples), ``detail``.
+    Columns: ``section`` (breaks, coefficients, cv, score, difference, pole, heldout), ``key``, ``value``,
+    ``low``, ``high`` (95 %), ``n`` (seeds, or samples), ``detail``. Section ``heldout``: one row per held-out
+    run and law, key ``<law>|<case>/<protocol>``, value its ``early_A_mse`` (the claims table's claim 9).
     """
     sp, rows = res["spline"], []
     add = lambda section, key, value, low=math.nan, high=math.nan, n=math.nan, detail="": rows.append(  # noqa: E731
@@ -408,23 +420,28 @@ def table(res: dict, settings: FreeformSettings) -> pd.DataFrame:
             est, lo, hi, n = paired(err, law, "model2", score, nr)
             add("difference", f"{score}: {law} - model2", est, lo, hi, n,
                 "paired per held-out run, mean per seed; < 0: better than Model 2")
+    for r in err.itertuples():
+        add("heldout", f"{r.law}|{r.run}", float(r.early_A_mse), n=1,
+            detail="held-out run: MSE of |A| over the early window after its first reversal")
     X_hi = sp.breaks[-1]
     e = pole_bend(sp, X_hi)
     reps = np.array([pole_bend(f, X_hi) for f in res["folds"]])
     n = len(reps)
     se = np.sqrt((n - 1) / n * ((reps - reps.mean(axis=0)) ** 2).sum(axis=0)) if n > 1 else np.full(2, np.nan)
     for i in range(2):
-        add("pole", f"alpha{i + 1} bend at X_hi", float(e[i]), float(e[i] - Z95 * se[i]), float(e[i] + Z95 * se[i]),
-            n, f"alpha(X_hi) - alpha(0) - alpha'(0) X_hi, X_hi = {X_hi:.4g}; jackknife over seeds")
+        add("pole", f"alpha{i + 1} bend at X_hi", float(e[i]), float(e[i] - t95(n) * se[i]),
+            float(e[i] + t95(n) * se[i]), n,
+            f"alpha(X_hi) - alpha(0) - alpha'(0) X_hi, X_hi = {X_hi:.4g}; jackknife over seeds, +-t_{n - 1} s.e.")
     return pd.DataFrame(rows)
 
 
 def curves_for_figure(res: dict, X) -> dict:
-    """``{"X", "alpha1", "alpha2", "se1", "se2", "label"}`` for ``figures.fig3``."""
+    """``{"X", "alpha1", "alpha2", "se1", "se2", "t", "label"}`` for ``figures.fig3`` (band: +-t se)."""
     a, se = jackknife_band(res["spline"], res["folds"], X)
-    return {"X": np.asarray(X), "alpha1": a[0], "alpha2": a[1], "se1": se[0], "se2": se[1],
-            "label": f"free-form ({len(res['spline'].breaks)} breaks, penalty {res['penalty']:g}, band: 1.96 "
-                     f"jackknife s.e.)"}
+    k = t95(len(res["folds"]))
+    return {"X": np.asarray(X), "alpha1": a[0], "alpha2": a[1], "se1": se[0], "se2": se[1], "t": k,
+            "label": f"free-form ({len(res['spline'].breaks)} breaks, penalty {res['penalty']:g}, band: "
+                     f"t_{len(res['folds']) - 1} = {k:.2f} jackknife s.e.)"}
 
 
 __all__ = ["FreeformSettings", "run", "fit_spline", "breaks_for", "table", "curves_for_figure", "pole_bend",

@@ -4,8 +4,11 @@ r"""Command line of the claims stage.
 
     python -m claims --compare results/compare --dem results/dem/<case> ... [--protocols heaviside sinusoidal ...] \
         [--calibration results/calibration/all/params.yaml] [--sets all heaviside_only ...] \
-        [--resamples 2000] [--seed 0] [--preset paper=config/config.yaml ...] --out results/claims
-        # -> paper_claims.csv, paper_claims.png, power.csv, README_section.md
+        [--resamples 2000] [--seed 0] [--preset paper=config/config.yaml ...] [--pole-start] --out results/claims
+        # -> paper_claims.csv, paper_claims.png, power.csv, reversal_design.csv, eq2_vs_paper.csv/.png,
+        #    README_section.md
+        # --pole-start: every set's pole_start_predictions.csv too (python -m compare.pole_start): the rows of
+        #   the paper's configuration of Model 1 (4-start-step, 4-start-sin)
     python -m claims plan --table results/claims/paper_claims.csv --dem results/dem/<case> ... \
         [--protocols heaviside sinusoidal ...] --out results/claims/plan.csv
         # -> seeds and core-hours that decide every undecided claim (claims.plan)
@@ -22,7 +25,7 @@ from pathlib import Path
 
 from dem_contract import REVERSAL_PROTOCOLS, DEMInputError
 
-from . import design, inputs, plan, power, report, table
+from . import design, eq2, inputs, plan, pole_start, power, report, table
 
 
 def build_parser():
@@ -41,6 +44,9 @@ def build_parser():
     ap.add_argument("--seed", type=int, default=0, help="random seed of the bootstrap")
     ap.add_argument("--preset", nargs="*", default=[], metavar="NAME=CONFIG",
                     help="presets whose power the README section states, e.g. paper=config/config.yaml")
+    ap.add_argument("--pole-start", action="store_true",
+                    help="read every set's pole_start_predictions.csv too: rows 4-start-* (Model 1 with its pole "
+                         "at each reversal's start, the paper's configuration)")
     ap.add_argument("--out", required=True, help="output folder, e.g. results/claims")
     return ap
 
@@ -63,11 +69,13 @@ def main(argv=None) -> int:
             raise ValueError(f"--resamples = {args.resamples}: must be at least 100")
         out = Path(args.out)
         out.mkdir(parents=True, exist_ok=True)
-        pred = inputs.read_comparison(args.compare, args.sets)
+        pred = (pole_start.read_variant(args.compare, args.sets) if args.pole_start
+                else inputs.read_comparison(args.compare, args.sets))
         dem_cases = [inputs.read_dem_case(d, args.protocols) for d in args.dem]
         params = Path(args.calibration) if args.calibration else Path(args.compare).parent / "calibration" / "all" / "params.yaml"
         ff = inputs.read_freeform(args.freeform) if args.freeform else None
-        tab = table.claims_table(pred, dem_cases, table.eq2_params(params), args.resamples, args.seed, ff)
+        eq2_all = table.eq2_params(params)
+        tab = table.claims_table(pred, dem_cases, eq2_all, args.resamples, args.seed, ff)
         tab.to_csv(out / "paper_claims.csv", index=False, float_format="%.6g")
         report.forest_plot(tab, out / "paper_claims.png")
         runs = inputs.runs(pred)
@@ -79,6 +87,11 @@ def main(argv=None) -> int:
         section = report.markdown_section(tab, source=f"`{out / 'paper_claims.csv'}`")
         section += "\n" + report.power_section(pw, presets, power.campaign_preset(pw), power.fabric_noise_check(args.dem))
         section += "\n" + report.design_section(dsg)
+        curves = eq2.eq2_table(dem_cases, eq2_all)
+        curves.to_csv(out / "eq2_vs_paper.csv", index=False, float_format="%.6g")
+        eq2.figure(curves, out / "eq2_vs_paper.png")
+        section += ("\n### Eq. 2 against the paper\n\n" + eq2.summary(curves, table.EQ2_MARGIN)
+                    + " (`eq2_vs_paper.csv`, `eq2_vs_paper.png`, `claims/eq2.py`)\n")
         (out / "README_section.md").write_text(section)
     except (DEMInputError, ValueError) as exc:
         print(f"claims: error: {exc}", file=sys.stderr)

@@ -1,19 +1,20 @@
 r"""The reversal design: which way of collecting reversals tells most about claim 4 per core-hour.
 
 Claim 4's unit is the seed: a seed's value is the mean, over its reversals scored
-out of sample, of the paired difference
+out of sample, of the paired difference of squared model errors
 
-.. math:: d = \mathrm{RMSE}_{M1} - \mathrm{RMSE}_{M2}
+.. math:: d = \mathrm{MSE}_{M1} - \mathrm{MSE}_{M2}
 
 of :math:`|A|` over the first ``table.EARLY_A`` strain after the reversal
-(``table.early_error_differences``). A campaign that runs several reversal
+(``table.early_scores``; the DEM's noise floor cancels from it, ``claims.ensemble``).
+A campaign that runs several reversal
 protocols per seed (a single reversal, a train of reversals spaced 0.3 strain,
 one spaced 0.5, ...) measures every design on the same seeds. For each protocol
 :math:`p` this module computes, over the seeds:
 
 - :math:`\bar d_{s,p}`, seed :math:`s`'s mean over the reversals of :math:`p`;
 - :math:`\mathrm{sd}_p`, the s.d. of :math:`\bar d_{s,p}` over seeds (``ddof=1``),
-  with its 95 % chi-square interval;
+  with its 90 % chi-square interval (the table's level), and the mean with its 90 % t interval;
 - :math:`c_p`, the CPU hours of one seed of that design alone: packing,
   pre-shear and the run of :math:`p` (the stage sidecars' ``cpu_time_s``);
 - the information per core-hour
@@ -50,6 +51,7 @@ import pandas as pd
 from scipy import stats
 
 from . import power, table
+from .stats import LEVEL
 
 COLUMNS = ["protocol", "seeds", "reversals_per_seed", "mean_difference", "mean_lo", "mean_hi", "sd_per_seed",
            "sd_lo", "sd_hi", "sd_single_reversal", "design_effect", "cpu_hours_per_seed",
@@ -63,7 +65,7 @@ def base_protocol(key: str) -> str:
     return _REVERSAL_SUFFIX.sub("", str(key))
 
 
-def sd_interval(sd: float, n: int, level: float = 0.95) -> tuple:
+def sd_interval(sd: float, n: int, level: float = LEVEL) -> tuple:
     r"""Chi-square interval of a standard deviation from ``n`` values: :math:`s\sqrt{(n-1)/\chi^2_{q}}`."""
     if n < 2 or not np.isfinite(sd):
         return math.nan, math.nan
@@ -96,10 +98,13 @@ def design_table(runs: dict, case_dirs, protocols, dem_cases=()) -> pd.DataFrame
         The same cases as read for the claims table (the fabric before each reversal); none: NaN recovery.
     """
     rows = []
+    dem = table.dem_of(runs)
     for p in protocols:
         sub = {k: v for k, v in runs.items() if base_protocol(k[3]) == p}
-        diffs, _, pairs, _ = table.early_error_differences(sub, "A_norm", table.EARLY_A)
-        per_case = {case: [x for g in groups.values() for x in g] for case, groups in diffs.items()}
+        scores, _ = table.early_scores(sub, dem, "A_norm", table.EARLY_A)
+        per_case = {}
+        for r in scores:
+            per_case.setdefault(r["key"][1], []).append(r["mse"]["model1"] - r["mse"]["model2"])
         _, v = table.per_seed(per_case)
         single = np.array([x for vals in per_case.values() for x in vals], float)
         single = single[np.isfinite(single)]
@@ -108,7 +113,7 @@ def design_table(runs: dict, case_dirs, protocols, dem_cases=()) -> pd.DataFrame
         sd1 = float(np.std(single, ddof=1)) if single.size >= 2 else math.nan
         lo, hi = sd_interval(sd, v.size)
         mean = float(v.mean()) if v.size else math.nan
-        half = (stats.t.ppf(0.975, v.size - 1) * sd / math.sqrt(v.size)) if v.size >= 2 else math.nan
+        half = (stats.t.ppf(0.5 + LEVEL / 2, v.size - 1) * sd / math.sqrt(v.size)) if v.size >= 2 else math.nan
         cost = power.dem_cost(case_dirs, [p])
         hours = (cost["setup_cpu_s"] + cost["transient_cpu_s"]) / 3600.0
         rows.append(dict(

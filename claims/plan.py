@@ -3,12 +3,13 @@ r"""The planner: how many seeds (and core-hours) decide every claim the table le
 ``python -m claims plan`` (and the rule ``claims_plan``) reads the claims table
 (``paper_claims.csv``: each row's estimate, null, margin, seed-to-seed s.d. and
 number of seeds) and the campaign's measured stage costs, and writes
-``plan.csv``: for every **inconclusive** claim the seeds that decide it at
-``power.POWER`` (80 %) power, at the measured effect, either way:
+``plan.csv``: for every **inconclusive** row (each figure's row of a model
+comparison included) the seeds that decide it at ``power.POWER`` (80 %)
+power, at the measured effect, either way, at the table's one level:
 
 - *reproduced* or *contradicted* (the side of the null the estimate is on):
-  the smallest :math:`n` whose two-sided 95 % t interval excludes the null on
-  that side with 80 % power (``power.seeds_needed``, noncentral t);
+  the smallest :math:`n` whose 90 % t interval excludes the null on that side
+  (one-sided 5 %) with 80 % power (``power.seeds_needed``, noncentral t);
 - *negligible* (only if :math:`|\hat\delta| < m`, the claim's margin): the
   smallest :math:`n` at which the 90 % interval lies inside :math:`\pm m`
   with 80 % power, two one-sided tests (``power_tost``):
@@ -164,7 +165,8 @@ def plan_table(table: pd.DataFrame, seed_cpu_s: float, ensembles: int = 1) -> pd
             needed, outcome = math.nan, "unknown"
         add = max(0.0, needed - n_now) if np.isfinite(needed) else needed
         hours = _hours(add, seed_cpu_s)
-        note = ("no seed-to-seed s.d.: the claim could not be computed (or has one seed)" if not np.isfinite(sd)
+        note = ("no seed-to-seed s.d.: the claim could not be computed (or has one seed; the table's detail "
+                "says why)" if not np.isfinite(sd)
                 else "measured effect about 0 and no margin: no number of seeds decides it"
                 if not options else "")
         rows.append(dict(

@@ -1,30 +1,29 @@
-r"""Power of the model comparisons: how much DEM decides "Model 1 better than Model 2" at 95 %.
+r"""Power of the model comparisons: how much DEM decides a comparison row at the table's level.
 
-Claims 4 (early |A|) and 7 (early mu) are decided on the per-seed means
-:math:`d_i` of the paired out-of-sample differences Model 1 minus Model 2
-(``claims.table.early_error_differences``). With their seed-to-seed standard
+Every model comparison of the claims table, per figure (claims 4 and 7, the
+paper's configuration of Model 1 ``4-start-*``; ``claims.table.model_error_rows``),
+is decided on the per-seed means :math:`d_i` of the paired out-of-sample
+differences of squared model error. With their seed-to-seed standard
 deviation :math:`s` and an effect :math:`\delta`, the power of ``n`` seeds is
-the probability that the two-sided 95 % Student t interval of the mean lies
-entirely on the effect's side of 0 (the verdict "reproduced" for
-:math:`\delta < 0`):
+the probability that the 90 % Student t interval of the mean lies entirely
+on the effect's side of 0 (a one-sided test at 5 %: the table's one level,
+``claims.stats``; the verdict "reproduced" for :math:`\delta < 0`):
 
-.. math:: P(n) = 1 - F_{t'}\big(t_{0.975,\,n-1};\ n - 1,\ |\delta| \sqrt n / s\big)
+.. math:: P(n) = 1 - F_{t'}\big(t_{0.95,\,n-1};\ n - 1,\ |\delta| \sqrt n / s\big)
 
 with :math:`F_{t'}` the noncentral t distribution (``scipy.stats.nct``).
 ``seeds_needed`` is the smallest ``n`` with :math:`P(n) \ge 0.8`; for large ``n``
 it approaches the normal closed form
-:math:`n \approx \big((z_{0.975} + z_{0.8})\, s / \delta\big)^2`. The table's
+:math:`n \approx \big((z_{0.95} + z_{0.8})\, s / \delta\big)^2`. The table's
 interval is the wider of the t interval and a bootstrap, so this ``n`` is a
 lower bound.
 
-Two effects per claim (``EFFECTS``):
+Two effects per row (``EFFECTS``):
 
 - ``measured``: the table's point estimate (it may be about 0, then no
   volume is enough: ``n`` is infinite or beyond any campaign);
-- ``minimal``: the smallest effect worth deciding, ``MIN_EFFECT_FRACTION`` of
-  the fall the models have to follow (mean over the scored runs of the DEM
-  curve's value at the reversal minus its minimum, ``SMOOTH``-sample running
-  mean). An improvement below 5 % of the fall would not show on Figs. 4 and 5.
+- ``minimal``: the smallest effect worth deciding, the row's margin (an
+  improvement of Model 1 by the margin: ``claims.margins``).
 
 DEM volume. Assumed: the per-seed differences are set by the DEM's noise,
 which falls as :math:`N^{-1/2}` with the number of disks :math:`N` and as
@@ -56,18 +55,19 @@ from scipy import stats
 
 from dem_contract import REVERSAL_PROTOCOLS, DEMInputError, read_series, stage_costs
 
-from . import margins, table
+from . import stats as claim_stats
+from . import table
 
-ALPHA = 0.05
+ALPHA = claim_stats.ALPHA         # one-sided, the table's one level
 #: What power.csv and the README section say for a cost the DEM's sidecars do not record (a case with no
 #: pack stage, data without timing sidecars or disk counts): the cost is unknown, not a number.
 UNKNOWN = "unknown"
 #: The columns of the power table that need the DEM's cost (disks, CPU time).
 COST_COLUMNS = ("disks_per_seed", "particles", "core_hours")
 POWER = 0.8
-MIN_EFFECT_FRACTION = margins.FALL_FRACTION   # the minimal effect is the claim's margin
 EFFECTS = ("measured", "minimal")
-COMPARED = (("4", "A_norm", "|A|", table.EARLY_A), ("7", "mu", "mu", table.EARLY_MU))
+#: The comparison rows of the table the power is computed for: claim prefix -> quantity, window.
+COMPARED = {"4": ("|A|", table.EARLY_A), "4-start": ("|A|", table.EARLY_A), "7": ("mu", table.EARLY_MU)}
 N_MAX = 10**7     # seeds beyond this are reported as infinite
 STAGES = ("pack", "preshear")
 COLUMNS = ["claim_id", "quantity", "window", "effect_choice", "effect", "sd_per_seed", "seeds_measured",
@@ -79,9 +79,10 @@ COLUMNS = ["claim_id", "quantity", "window", "effect_choice", "effect", "sd_per_
 
 
 def power_t(n, sd: float, delta: float, alpha: float = ALPHA) -> float:
-    r"""Probability that the two-sided (1 - alpha) t interval of ``n`` values lies on ``delta``'s side of 0.
+    r"""Probability that the one-sided level-``alpha`` t test of ``n`` values finds ``delta``'s side of 0
+    (the two-sided (1 - 2 alpha) interval lies on that side).
 
-    .. math:: P = 1 - F_{t'}\big(t_{1-\alpha/2,\,n-1};\ n-1,\ |\delta|\sqrt n/s\big)
+    .. math:: P = 1 - F_{t'}\big(t_{1-\alpha,\,n-1};\ n-1,\ |\delta|\sqrt n/s\big)
 
     Parameters
     ----------
@@ -95,15 +96,15 @@ def power_t(n, sd: float, delta: float, alpha: float = ALPHA) -> float:
     if n < 2 or not (np.isfinite(sd) and sd > 0 and np.isfinite(delta)):
         return math.nan
     df = n - 1
-    crit = stats.t.ppf(1.0 - alpha / 2.0, df)
+    crit = stats.t.ppf(1.0 - alpha, df)
     return float(stats.nct.sf(crit, df, abs(delta) * math.sqrt(n) / sd))
 
 
 def normal_seeds(sd: float, delta: float, alpha: float = ALPHA, power: float = POWER) -> float:
-    r"""The normal approximation :math:`n = \big((z_{1-\alpha/2} + z_{P})\, s/\delta\big)^2` (not rounded)."""
+    r"""The normal approximation :math:`n = \big((z_{1-\alpha} + z_{P})\, s/\delta\big)^2` (not rounded)."""
     if delta == 0:
         return math.inf
-    return float(((stats.norm.ppf(1 - alpha / 2) + stats.norm.ppf(power)) * sd / delta) ** 2)
+    return float(((stats.norm.ppf(1 - alpha) + stats.norm.ppf(power)) * sd / delta) ** 2)
 
 
 def seeds_needed(sd: float, delta: float, alpha: float = ALPHA, power: float = POWER) -> float:
@@ -128,9 +129,6 @@ def scaled_sd(sd0: float, disks0: float, transients0: float, disks: float, trans
 
 
 # --------------------------------------------------------------------------- what the campaign measured
-
-
-fall_size = margins.fall_size
 
 
 def _sidecar(path) -> dict:
@@ -189,49 +187,58 @@ def fabric_noise_check(case_dirs) -> dict:
     return {"measured": m, "independent_contacts": e, "ratio": m / e if np.isfinite(e) else math.nan}
 
 
-def transients_per_seed(pairs) -> float:
-    """Mean number of distinct reversal runs (protocols) scored out of sample per case."""
+def transients_per_seed(keys) -> float:
+    """Mean number of distinct reversal runs (protocol positions) scored out of sample per case."""
     per_case = {}
-    for key, _ in pairs:
+    for key in keys:
         per_case.setdefault(key[1], set()).add(key[3])
     return _mean([len(v) for v in per_case.values()])
+
+
+def compared_rows(table_rows: pd.DataFrame) -> pd.DataFrame:
+    """The comparison rows of the claims table ``COMPARED`` names (``<prefix>-step``, ``-sin``, ``-pooled``)."""
+    ids = table_rows["claim_id"].astype(str)
+    keep = ids.map(lambda c: c.rsplit("-", 1)[0] in COMPARED and c.rsplit("-", 1)[-1] in ("step", "sin", "pooled"))
+    return table_rows[keep]
 
 
 # --------------------------------------------------------------------------- the power table
 
 
-def power_table(runs: dict, case_dirs, table_rows: pd.DataFrame, protocols=REVERSAL_PROTOCOLS,
-                min_effect_fraction: float = MIN_EFFECT_FRACTION):
-    """One row per compared claim (4, 7) and effect choice (``COLUMNS``), and the campaign's DEM cost.
+def power_table(runs: dict, case_dirs, table_rows: pd.DataFrame, protocols=REVERSAL_PROTOCOLS):
+    """One row per comparison row of the table (``compared_rows``) and effect choice (``COLUMNS``), and the DEM cost.
 
     Parameters
     ----------
     runs : dict
-        ``claims.inputs.runs`` of the comparison's curves.
+        ``claims.inputs.runs`` of the comparison's curves (the transients scored per seed, per figure).
     case_dirs : list of path
         The DEM cases (stage sidecars: disks and CPU time).
     table_rows : DataFrame
-        The claims table (its estimates are the measured effects).
+        The claims table: each row's estimate (the measured effect), margin (the minimal one), s.d. and n.
     """
     cost = dem_cost(case_dirs, protocols)
-    estimates = table_rows.set_index("claim_id")["estimate"]
+    scored = {}
+    for key, cur in runs.items():
+        if not key[4] and "dem" in cur:
+            scored.setdefault(table.kind_of(cur["dem"]), []).append(key)
+    kinds = {"step": ("heaviside",), "sin": ("sinusoidal",), "pooled": ("heaviside", "sinusoidal")}
     rows = []
-    for claim_id, column, label, window in COMPARED:
-        diffs, _, pairs, _ = table.early_error_differences(runs, column, window)
-        _, v = table.per_seed(diffs)
-        sd = float(np.std(v, ddof=1)) if v.size >= 2 else math.nan
-        k0 = transients_per_seed(pairs)
-        effects = {"measured": float(estimates.get(claim_id, math.nan)),
-                   "minimal": -min_effect_fraction * fall_size(pairs, column)}
+    for _, r in compared_rows(table_rows).iterrows():
+        prefix, figure = str(r["claim_id"]).rsplit("-", 1)
+        label, window = COMPARED[prefix]
+        k0 = transients_per_seed([k for kind in kinds[figure] for k in scored.get(kind, [])])
+        sd, n_now = float(r["sd"]), int(r["n"]) if np.isfinite(r["n"]) else 0
+        effects = {"measured": float(r["estimate"]), "minimal": -float(r["margin"])}
+        seed_cpu = cost["setup_cpu_s"] + len(protocols) * cost["transient_cpu_s"]   # a new seed runs every protocol
         for choice in EFFECTS:
             delta = effects[choice]
             n = seeds_needed(sd, delta)
-            seed_cpu = cost["setup_cpu_s"] + k0 * cost["transient_cpu_s"]
             rows.append(dict(
-                claim_id=claim_id, quantity=label, window=window, effect_choice=choice, effect=delta,
-                sd_per_seed=sd, seeds_measured=int(v.size), disks_per_seed=cost["disks"],
+                claim_id=r["claim_id"], quantity=label, window=window, effect_choice=choice, effect=delta,
+                sd_per_seed=sd, seeds_measured=n_now, disks_per_seed=cost["disks"],
                 transients_per_seed=k0, seeds_needed=n, transients=n * k0, particles=n * cost["disks"],
-                core_hours=n * seed_cpu / 3600.0, power_measured=power_t(v.size, sd, delta)))
+                core_hours=n * seed_cpu / 3600.0, power_measured=power_t(n_now, sd, delta)))
     return pd.DataFrame(rows, columns=COLUMNS), cost
 
 

@@ -10,6 +10,20 @@ import math
 import numpy as np
 
 
+def early_mse(s, dem, model, window: float, start: float = 0.0) -> float:
+    r"""Mean squared error of a model curve against the DEM over the first ``window`` strain (``early_rmse`` squared).
+
+    The claims' model comparisons difference it per run: the DEM's own noise enters
+    both models' MSE on the same run alike and cancels from the difference
+    (``claims.ensemble``); an RMSE difference would compress the model error by it.
+    """
+    s = np.asarray(s, float)
+    m = (s > start) & (s <= start + window)
+    if m.sum() < 2:
+        return math.nan
+    return float(np.mean((np.asarray(model, float)[m] - np.asarray(dem, float)[m]) ** 2))
+
+
 def early_rmse(s, dem, model, window: float, start: float = 0.0) -> float:
     r"""RMSE of a model curve against the DEM over the first ``window`` strain after the reversal.
 
@@ -21,8 +35,4 @@ def early_rmse(s, dem, model, window: float, start: float = 0.0) -> float:
     samples (interpolated onto them by the caller); the DEM raw, not smoothed.
     NaN with fewer than 2 samples in the window.
     """
-    s = np.asarray(s, float)
-    m = (s > start) & (s <= start + window)
-    if m.sum() < 2:
-        return math.nan
-    return float(np.sqrt(np.mean((np.asarray(model, float)[m] - np.asarray(dem, float)[m]) ** 2)))
+    return math.sqrt(early_mse(s, dem, model, window, start))

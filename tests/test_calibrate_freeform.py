@@ -135,7 +135,14 @@ def test_freeform_fit_runs_in_seconds_of_cpu(model2_truth):
 
 def test_freeform_table_holds_breaks_coefficients_cv_scores_and_pole_bends(model2_truth):
     tab = model2_truth["res"]["table"]
-    assert set(tab["section"]) == {"breaks", "coefficients", "cv", "score", "difference", "pole"}
+    assert set(tab["section"]) == {"breaks", "coefficients", "cv", "score", "difference", "pole", "heldout"}
+    held = tab[tab["section"] == "heldout"]       # claim 9 per figure: every held-out run's early MSE, per law
+    errors = model2_truth["res"]["errors"]
+    assert len(held) == len(errors) and np.allclose(held["value"], errors["early_A_mse"], equal_nan=True)
+    assert np.allclose(errors["early_A_mse"], errors["early_A_norm"] ** 2, equal_nan=True)
+    pole = tab[tab["section"] == "pole"].iloc[0]       # the jackknife at t_{n-1} (3 seeds: 4.30), not 1.96
+    se = (pole["high"] - pole["low"]) / 2 / freeform.t95(int(pole["n"]))
+    assert freeform.t95(3) == pytest.approx(4.302652729911275) and se >= 0
     assert (tab["section"] == "coefficients").sum() == 2 * (FAST.n_breaks + 2)
     chosen = tab[(tab["section"] == "cv") & tab["detail"].str.contains("chosen")]
     assert len(chosen) == 1 and chosen["value"].iloc[0] == tab.loc[tab["section"] == "cv", "value"].min()
@@ -190,17 +197,31 @@ def test_early_score_is_the_claims_early_rmse_after_the_first_reversal_as_before
     assert checked == 2 * len(d["replays"])
 
 
-def test_claims_table_gets_the_upper_bound_and_pole_rows_from_freeform_csv(model2_truth, tmp_path):
-    from claims import inputs, table
+def test_claims_table_gets_the_upper_bound_per_figure_and_pole_rows_from_freeform_csv(model2_truth, tmp_path):
+    from claims import inputs, stats, table
 
     path = tmp_path / "freeform.csv"
     model2_truth["res"]["table"].to_csv(path, index=False)
-    rows = table.freeform_rows(inputs.read_freeform(path))
-    assert [r["claim_id"] for r in rows] == ["9", "10"]
-    up = model2_truth["res"]["table"].set_index("key").loc["early_A_norm: freeform - model2"]
-    assert rows[0]["estimate"] == pytest.approx(up["value"]) and rows[0]["low"] == pytest.approx(up["low"])
-    assert all(r["verdict"] in ("reproduced", "contradicted", "inconclusive") for r in rows)
-    assert table.freeform_rows(freeform.note_table("one seed")) == []
+    ff = inputs.read_freeform(path)
+    rng = np.random.default_rng(0)
+    dem = {}          # the comparison's DEM curves of the held-out runs: their kind and noise floor
+    for label in {r.label for r in model2_truth["replays"]}:
+        case, proto = label.split("/")
+        s = np.linspace(0.0, 0.3, 301)
+        dem[(case, "g", proto)] = pd.DataFrame({"s_rev": s, "A_norm": 0.1 + rng.normal(0, 0.01, s.size),
+                                                "kind": "sinusoidal" if proto == "sinusoidal" else "heaviside"})
+    rows = table.freeform_rows(ff, dem, table.Bootstrap(200))
+    assert [r["claim_id"] for r in rows] == ["9-step", "9-sin", "9-pooled", "10"]
+    err = model2_truth["res"]["errors"]
+    wide = err.pivot_table(index=["case", "run"], columns="law", values="early_A_mse")
+    step = wide[~wide.index.get_level_values("run").str.endswith("sinusoidal")]
+    d = (step["freeform"] - step["model2"]).groupby(level="case").mean()
+    assert rows[0]["estimate"] == pytest.approx(d.mean()) and rows[0]["n"] == 3
+    assert all(r["verdict"] in stats.VERDICTS or "," in r["verdict"] for r in rows)
+    pole = ff.set_index("key").loc["alpha1 bend at X_hi"]    # 95 % t of freeform.csv -> the table's 90 % t
+    half90 = (rows[-1]["high"] - rows[-1]["low"]) / 2
+    assert half90 == pytest.approx((pole["high"] - pole["low"]) / 2 * stats.t_quantile(3) / freeform.t95(3))
+    assert table.freeform_rows(freeform.note_table("one seed"), dem, table.Bootstrap(200)) == []
 
 
 @pytest.mark.heavy

@@ -39,30 +39,37 @@ def model2_truth(tmp_path_factory):
 
 
 def test_model1_truth_with_a_strong_pole_reproduces_model1_captures_the_fall_better(model1_truth):
-    row = model1_truth.loc["4"]
-    assert row["verdict"] == "reproduced"
-    assert row["high"] < 0 and row["n"] == 4
+    # issue 32: one row per figure (step reversals, Fig. 4; the sinusoidal reversal, Fig. 5), a pooled one
+    for cid in ("4-sin", "4-pooled"):
+        row = model1_truth.loc[cid]
+        assert row["verdict"] == "reproduced"
+        assert row["high"] < 0 and row["n"] == 4
+    assert model1_truth.loc["4-step", "estimate"] < 0
+    assert model1_truth.loc["4-pooled", "adequacy"].startswith("Model 1 within")   # the truth: inside the DEM's band
 
 
 def test_model2_truth_does_not_reproduce_model1_captures_the_fall_better(model2_truth):
-    row = model2_truth.loc["4"]
-    assert row["verdict"] in ("negligible", "contradicted", "contradicted, negligible")
-    assert row["estimate"] > 0           # the generating model has the smaller error
+    for cid in ("4-step", "4-sin", "4-pooled"):
+        row = model2_truth.loc[cid]
+        assert row["verdict"] in ("negligible", "contradicted", "contradicted, negligible")
+        assert row["estimate"] > 0           # the generating model has the smaller error
 
 
 def test_model_truth_decides_the_friction_claim_both_ways(model1_truth, model2_truth):
-    assert model1_truth.loc["7", "verdict"] == "reproduced"
-    assert model2_truth.loc["7", "verdict"] in ("inconclusive", "contradicted")
+    # the paper's claim 7 is the zoom of Fig. 4c: a step reversal
+    assert model1_truth.loc["7-step", "verdict"] == "reproduced"
+    assert model2_truth.loc["7-step", "verdict"] in ("inconclusive", "contradicted")
 
 
 def test_the_table_has_every_claim_with_an_interval_a_named_test_and_a_verdict(model1_truth):
-    assert list(model1_truth.index) == ["1a", "1b", "2a", "2b", "3", "4", "5", "6", "7", "8"]
-    assert set(model1_truth["verdict"]) <= set(stats.VERDICTS)
+    assert list(model1_truth.index) == ["1a", "1b", "2a", "2b", "3", "4-step", "4-sin", "4-pooled", "5", "6",
+                                        "7-step", "7-sin", "7-pooled", "8"]
+    assert {p.strip() for v in model1_truth["verdict"] for p in v.split(",")} <= set(stats.VERDICTS)
     computed = model1_truth.drop(index="2b")    # 2b needs a calibration's Eq. 2, not given here
     assert np.isfinite(computed[["estimate", "low", "high"]].to_numpy(float)).all()
     assert (computed["low"] <= computed["estimate"]).all() and (computed["estimate"] <= computed["high"]).all()
     assert "bootstrap over seeds, 1000 resamples" in model1_truth.loc["3", "test"]
-    assert "bootstrap over seeds, 1000 resamples" in model1_truth.loc["4", "test"]
+    assert "bootstrap over seeds, 1000 resamples" in model1_truth.loc["4-step", "test"]
     assert model1_truth.loc["2b", "verdict"] == "inconclusive"
 
 
@@ -76,21 +83,23 @@ def test_a_model_made_fall_is_reproduced_and_its_steady_angle_is_reachable(model
 
 
 def test_clopper_pearson_of_3_out_of_3_is_the_closed_form():
+    # the table's one level (issue 32): a 90 % interval, 5 % on each side
     est, lo, hi, n = stats.clopper_pearson(3, 3)
     assert (est, hi, n) == (1.0, 1.0, 3)
-    assert lo == pytest.approx(0.025 ** (1 / 3), rel=1e-9)        # Beta(0.025; 3, 1) = 0.025^(1/3) = 0.292
+    assert lo == pytest.approx(0.05 ** (1 / 3), rel=1e-9)        # Beta(0.05; 3, 1) = 0.05^(1/3) = 0.368
+    assert stats.clopper_pearson(3, 3, level=0.95)[1] == pytest.approx(0.025 ** (1 / 3), rel=1e-9)
 
 
 def test_clopper_pearson_of_0_out_of_n_is_the_closed_form():
     est, lo, hi, _ = stats.clopper_pearson(0, 6)
     assert (est, lo) == (0.0, 0.0)
-    assert hi == pytest.approx(1 - 0.025 ** (1 / 6), rel=1e-9)
+    assert hi == pytest.approx(1 - 0.05 ** (1 / 6), rel=1e-9)
 
 
 def test_bootstrap_interval_of_a_mean_approaches_the_normal_interval():
     x = np.random.default_rng(3).normal(2.0, 1.0, 400)
     est, lo, hi, n = stats.mean_interval(x, n_resamples=2000)
-    half = 1.96 * x.std(ddof=1) / np.sqrt(n)
+    half = 1.6449 * x.std(ddof=1) / np.sqrt(n)          # the table's 90 % interval
     assert est == pytest.approx(x.mean())
     assert lo == pytest.approx(est - half, abs=0.15 * half) and hi == pytest.approx(est + half, abs=0.15 * half)
 
@@ -217,8 +226,8 @@ def test_claims_over_cases_with_a_schedule_use_one_value_per_seed_and_count_ever
                            [read_dem_case(d) for d in cases], eq2=None, n_resamples=1000).set_index("claim_id")
     # a seed's reversals of one kind are averaged first: repeating them leaves every seed's value, so every
     # interval over seeds, as it was (the collapse, 2a, pools the samples of a seed: more samples, same seeds)
-    per_seed = ["1a", "1b", "3", "4", "5", "6", "7", "8"]
-    assert classic.loc[per_seed, "n"].tolist() == [4] * 8
+    per_seed = ["1a", "1b", "3", "4-step", "4-sin", "4-pooled", "5", "6", "7-step", "7-sin", "7-pooled", "8"]
+    assert classic.loc[per_seed, "n"].tolist() == [4] * len(per_seed)
     for col in ("estimate", "low", "high", "n"):
         assert with_copies.loc[per_seed, col].tolist() == pytest.approx(classic.loc[per_seed, col].tolist(),
                                                                         rel=1e-12, nan_ok=True), col
@@ -239,7 +248,7 @@ def test_command_line_writes_the_table_the_figure_and_the_readme_section(model1_
     assert main(["--compare", str(tmp_path / "compare"), "--dem", *map(str, dirs), "--calibration",
                  str(root / "params.yaml"), "--resamples", "500", "--out", str(tmp_path / "claims")]) == 0
     table = pd.read_csv(tmp_path / "claims" / "paper_claims.csv")
-    assert len(table) == 10 and table.loc[table["claim_id"] == "2b", "n"].item() == 4   # Eq. 2 read this time
+    assert len(table) == 14 and table.loc[table["claim_id"] == "2b", "n"].item() == 4   # Eq. 2 read this time
     section = (tmp_path / "claims" / "README_section.md").read_text()
     claims_part = section.split("\n### ")[0]        # the power and reversal-design tables follow it
     assert claims_part.count("\n| ") == 1 + len(table) and "**reproduced**" in section
@@ -254,10 +263,10 @@ def test_command_line_names_a_missing_comparison_and_exits_2(tmp_path, capsys):
 
 
 def test_interval_of_three_seeds_is_at_least_the_student_t_interval():
-    # three seeds on one side: the percentile bootstrap spans only their range; the t interval
-    # mean +- t(0.975, 2) s / sqrt(3) = 2 +- 4.303 * 1 / sqrt(3) reaches below 0
-    est, lo, hi, n = stats.mean_interval([1.0, 2.0, 3.0])
-    half = 4.302652729911275 / np.sqrt(3.0)
-    assert (est, n) == (2.0, 3)
-    assert lo == pytest.approx(2.0 - half, rel=1e-9) and hi == pytest.approx(2.0 + half, rel=1e-9)
+    # three seeds on one side: the percentile bootstrap spans only their range; the (90 %) t interval
+    # mean +- t(0.95, 2) s / sqrt(3) = 3 +- 2.920 * sqrt(7) / sqrt(3) reaches below 0
+    est, lo, hi, n = stats.mean_interval([1.0, 2.0, 6.0])
+    half = 2.919985580355516 * np.sqrt(7.0) / np.sqrt(3.0)
+    assert (est, n) == (3.0, 3)
+    assert lo == pytest.approx(3.0 - half, rel=1e-9) and hi == pytest.approx(3.0 + half, rel=1e-9)
     assert stats.verdict(lo, hi, 0.0, ">") == "inconclusive"

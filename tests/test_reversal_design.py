@@ -1,7 +1,8 @@
-"""The reversal-design table (claims/design.py) on curves whose RMSEs are known in closed form.
+"""The reversal-design table (claims/design.py) on curves whose errors are known in closed form.
 
 DEM |A| is a constant; Model 1 and Model 2 are offsets of it, so each run's
-claim-4 difference is exactly |offset 1| - |offset 2|.
+claim-4 difference of squared model errors (issue 32: MSE, not RMSE) is exactly
+offset 1^2 - offset 2^2.
 """
 import json
 import math
@@ -33,7 +34,7 @@ def case_dir(tmp_path, seed: int, cpu: dict):
 @pytest.fixture
 def campaign(tmp_path):
     """Four seeds: a single reversal each, and a train of two identical reversals (fully correlated)."""
-    single = {1: 0.001, 2: 0.003, 3: 0.002, 4: 0.006}     # seed -> Model 1's excess RMSE
+    single = {1: 0.001, 2: 0.003, 3: 0.002, 4: 0.006}     # seed -> Model 1's offset (its RMSE; Model 2's is 0)
     train = {1: 0.002, 2: 0.002, 3: 0.004, 4: 0.000}
     runs, dirs = {}, []
     for seed in single:
@@ -50,9 +51,10 @@ def test_each_protocol_gets_its_seed_to_seed_sd_cost_and_information(campaign):
     runs, dirs, single, train = campaign
     out = design.design_table(runs, dirs, ["single", "train"]).set_index("protocol")
     for name, values, hours in (("single", single, (600 + 1800 + 1200) / 3600), ("train", train, 1.3333333)):
-        sd = np.std(list(values.values()), ddof=1)
+        d = np.array(list(values.values())) ** 2        # MSE_1 - MSE_2 of constant offsets
+        sd = np.std(d, ddof=1)
         assert out.loc[name, "seeds"] == 4
-        assert out.loc[name, "mean_difference"] == pytest.approx(np.mean(list(values.values())), abs=1e-12)
+        assert out.loc[name, "mean_difference"] == pytest.approx(d.mean(), abs=1e-15)
         assert out.loc[name, "sd_per_seed"] == pytest.approx(sd, rel=1e-9)
         assert out.loc[name, "cpu_hours_per_seed"] == pytest.approx(hours, rel=1e-6)
         assert out.loc[name, "information_per_core_hour"] == pytest.approx(1 / (sd ** 2 * hours), rel=1e-6)
@@ -87,9 +89,9 @@ def test_recovery_of_a_reversal_from_the_steady_pre_shear_is_about_one(tmp_path)
 
 
 def test_sd_interval_is_the_chi_square_one():
-    lo, hi = design.sd_interval(2.0, 10)
-    assert lo == pytest.approx(2.0 * math.sqrt(9 / stats.chi2.ppf(0.975, 9)))
-    assert hi == pytest.approx(2.0 * math.sqrt(9 / stats.chi2.ppf(0.025, 9)))
+    lo, hi = design.sd_interval(2.0, 10)        # the table's 90 % level
+    assert lo == pytest.approx(2.0 * math.sqrt(9 / stats.chi2.ppf(0.95, 9)))
+    assert hi == pytest.approx(2.0 * math.sqrt(9 / stats.chi2.ppf(0.05, 9)))
     assert lo < 2.0 < hi
     assert all(math.isnan(x) for x in design.sd_interval(1.0, 1))
 
