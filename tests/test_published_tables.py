@@ -54,7 +54,7 @@ def test_a_missing_recomputed_table_is_named_and_a_table_agrees_with_itself(tmp_
 
 @pytest.mark.parametrize("edit, agree", [(scale("10", "estimate", 1 + published.RTOL / 2), True),
                                          (scale("10", "estimate", 1 + 2 * published.RTOL), False),
-                                         (scale("4", "n", 2), False)],
+                                         (scale("4-step", "n", 2), False)],
                          ids=["half the tolerance", "twice the tolerance", "a count doubled"])
 def test_numbers_agree_to_the_tolerance_and_counts_exactly(tmp_path, edit, agree):
     results = recomputed(tmp_path, edit)
