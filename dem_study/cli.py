@@ -125,7 +125,7 @@ def stiffness_study(args) -> int:
     table.to_csv(out / "stiffness.csv", index=False)
     readings.to_csv(out / "fabric_readings.csv", index=False)
     stiffness.figure(table, out / "stiffness.png")
-    cols = [c for c in ("kappa", "seeds", "mu", "mu_se", "A_norm", "A_norm_se", "X", "X_se", "theta_A_deg", "phi",
+    cols = [c for c in (*stiffness.SETTING, "seeds", "mu", "mu_se", "A_norm", "A_norm_se", "X", "X_se", "theta_A_deg", "phi",
                         "Z", "A_min_early", "mu_early", "overlap_mean_d", "core_hours_per_seed") if c in table]
     print(table[cols].to_string(index=False, float_format=lambda x: f"{x:.4g}"))
     if len(readings):

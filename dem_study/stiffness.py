@@ -33,6 +33,8 @@ from .analysis import StudyInputError, mean_and_se, strain_edges
 from .bulk import load_case
 
 STEADY = ("mu", "A_norm", "X", "theta_A_deg", "phi", "Z")
+#: What makes a setting: the stiffness axis varies kappa; the checks at a fixed kappa vary the rest.
+SETTING = ("kappa", "inertial_number", "dt_over_tc", "contact_law", "restitution")
 AXIAL = {"theta_A_deg"}
 CENSUS = "preshear.census.json"
 
@@ -53,8 +55,12 @@ def run_summary(case_dir, steady_window: float, early_strain: float, bin_width: 
     c = res.curves
     early = c[c["strain_since_reversal"] < early_strain]
     k = int(early["A_norm"].to_numpy().argmin())
-    row = dict(case=case_dir.name, kappa=float(scene["material"]["kappa"]), seed=int(scene["seed"]),
-               dt_over_tc=float(scene["timestep"]["dt_over_tc"]), N=int(res.cost["N"]),
+    side = json.loads((case_dir / "preshear.json").read_text())
+    mat = side["scene"]["material"]   # the scene as the stage read it, defaults filled
+    row = dict(case=case_dir.name, kappa=float(mat["kappa"]), seed=int(scene["seed"]),
+               inertial_number=float(scene["loading"]["inertial_number"]),
+               dt_over_tc=float(scene["timestep"]["dt_over_tc"]), contact_law=str(mat["contact_law"]),
+               restitution=float(mat["restitution"]), N=int(res.cost["N"]),
                **res.steady, X=math.sqrt(2.0) * st["A_xy"] * sign,
                A_min_early=float(early["A_norm"].iloc[k]),
                strain_at_A_min=float(early["strain_since_reversal"].iloc[k]),
@@ -62,10 +68,11 @@ def run_summary(case_dir, steady_window: float, early_strain: float, bin_width: 
                core_hours=float(res.cost["core_hours"]),
                core_hours_preshear=float(res.cost["cpu_time_preshear_s"]) / 3600)
     census = case_dir / CENSUS
-    if census.is_file():
-        cs = json.loads(census.read_text())
-        row["overlap_mean_d"] = cs["overlap_d"]["mean"]
-        row["overlap_p90_d"] = cs["overlap_d"]["p90"]
+    cs = json.loads(census.read_text()) if census.is_file() else None
+    overlap = side.get("overlap_end_d") or (cs or {}).get("overlap_d")   # sidecars before 2026-11-27: the census
+    if overlap:
+        row["overlap_mean_d"], row["overlap_p90_d"] = overlap["mean"], overlap["p90"]
+    if cs:
         row["rattler_fraction"] = cs["rattler_fraction"]
         for name, f in cs["fabric"].items():
             if "X" in f:
@@ -74,28 +81,40 @@ def run_summary(case_dir, steady_window: float, early_strain: float, bin_width: 
 
 
 def runs_table(case_dirs, steady_window: float, early_strain: float) -> pd.DataFrame:
-    """One row per case (``run_summary``), sorted by kappa and seed."""
+    """One row per case (``run_summary``), sorted by setting and seed."""
     rows = [run_summary(d, steady_window, early_strain) for d in case_dirs]
     if not rows:
         raise StudyInputError("no case given")
-    return pd.DataFrame(rows).sort_values(["kappa", "seed"], ignore_index=True)
+    return pd.DataFrame(rows).sort_values([*SETTING, "seed"], ignore_index=True)
+
+
+def base_setting(runs: pd.DataFrame) -> dict:
+    """The stiffness axis's settings other than kappa: those most runs share."""
+    return {q: runs[q].mode().iloc[0] for q in SETTING if q != "kappa"}
+
+
+def on_axis(table: pd.DataFrame, base: dict) -> pd.Series:
+    """Rows of ``table`` on the stiffness axis: every setting but kappa equals the base's."""
+    return np.logical_and.reduce([table[q] == v for q, v in base.items()])
 
 
 def stiffness_table(runs: pd.DataFrame) -> pd.DataFrame:
-    """Per kappa: seeds, mean and SE of every steady and early quantity, overlap, core-hours per
-    seed, and each steady value's distance from the stiffest kappa's in combined SEs (``z_<q>``)."""
+    """Per setting (``SETTING``): seeds, mean and SE of every steady and early quantity, overlap,
+    core-hours per seed, and each steady value's distance in combined SEs (``z_<q>``) from the
+    stiffest kappa on the stiffness axis (``base_setting``), with ``on_axis`` marking the axis's rows."""
     early = ("A_min_early", "strain_at_A_min", "mu_early")
     extra = [q for q in ("overlap_mean_d", "overlap_p90_d", "rattler_fraction") if q in runs]
     rows = []
-    for kappa, g in runs.groupby("kappa", sort=True):
-        row = dict(kappa=kappa, seeds=len(g), N=int(g["N"].iloc[0]),
+    for setting, g in runs.groupby(list(SETTING), sort=True):
+        row = dict(zip(SETTING, setting), seeds=len(g), N=int(g["N"].iloc[0]),
                    core_hours_per_seed=float(g["core_hours"].mean()),
                    core_hours_preshear_per_seed=float(g["core_hours_preshear"].mean()))
         for q in (*STEADY, *early, *extra):
             row[q], row[f"{q}_se"] = mean_and_se(g[q].to_numpy(dtype=float), q in AXIAL)
         rows.append(row)
     table = pd.DataFrame(rows)
-    ref = table.iloc[-1]
+    table["on_axis"] = on_axis(table, base_setting(runs))
+    ref = table[table["on_axis"]].iloc[-1]
     for q in STEADY:
         se = np.hypot(table[f"{q}_se"], ref[f"{q}_se"])
         table[f"z_{q}"] = np.where(se > 0, (table[q] - ref[q]) / se, np.nan)
@@ -103,11 +122,11 @@ def stiffness_table(runs: pd.DataFrame) -> pd.DataFrame:
 
 
 def readings_table(runs: pd.DataFrame) -> pd.DataFrame:
-    """Per kappa and reading: the snapshot X (mean, SE over seeds) and its seed-paired difference
+    """Per setting and reading: the snapshot X (mean, SE over seeds) and its seed-paired difference
     from the data contract's reading (mean, SE); empty without census files."""
     names = [c.removeprefix("X_") for c in runs if c.startswith("X_")]
     rows = []
-    for kappa, g in runs.groupby("kappa", sort=True):
+    for setting, g in runs.groupby(list(SETTING), sort=True):
         if "X_contract" not in g or g["X_contract"].isna().all():
             continue
         for name in names:
@@ -115,18 +134,19 @@ def readings_table(runs: pd.DataFrame) -> pd.DataFrame:
             diff = x - g["X_contract"].to_numpy(dtype=float)
             m, se = mean_and_se(x, False)
             dm, dse = mean_and_se(diff, False)
-            rows.append(dict(kappa=kappa, reading=name, seeds=len(g), X=m, X_se=se,
+            rows.append(dict(zip(SETTING, setting), reading=name, seeds=len(g), X=m, X_se=se,
                              minus_contract=dm, minus_contract_se=dse))
     return pd.DataFrame(rows)
 
 
 def figure(table: pd.DataFrame, out) -> None:
-    """Steady |A|, -X and mu against kappa (seed mean +- SE), and the core-hours per seed."""
+    """Steady |A|, -X and mu against kappa on the stiffness axis (seed mean +- SE), and the core-hours per seed."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    table = table[table["on_axis"]]
     fig, axes = plt.subplots(1, 3, figsize=(11, 3.4), constrained_layout=True)
     k = table["kappa"]
     for q, label in (("A_norm", "steady |A|"), ("X", "steady -X")):

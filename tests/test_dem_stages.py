@@ -254,7 +254,8 @@ def test_stiffness_run_summary_of_a_real_case_reads_steady_x_early_transient_and
     assert 0 <= row["A_min_early"] < row["A_norm"]                # the fabric collapses after the reversal
     assert 0 < row["strain_at_A_min"] < 0.1
     census = json.loads((cdir / stiffness.CENSUS).read_text())
-    assert row["overlap_mean_d"] == census["overlap_d"]["mean"]
+    assert row["overlap_mean_d"] == json.loads((cdir / "preshear.json").read_text())["overlap_end_d"]["mean"]
+    assert row["overlap_mean_d"] == pytest.approx(census["overlap_d"]["mean"], rel=0.05)
     assert row["X_contract"] == census["fabric"]["contract"]["X"]
     assert row["core_hours"] > row["core_hours_preshear"] > 0
 
@@ -305,3 +306,14 @@ def test_contact_census_overlap_is_the_force_over_the_stiffness_in_units_of_d(ca
     assert ov["n"] > 100
     assert 0.2 < ov["mean"] * kappa < 5
     assert ov["median"] <= ov["p90"] <= ov["max"] < 0.05   # below the overlap guard
+
+
+@pytest.mark.parametrize("stage", ["pack", "preshear", "heaviside"])
+def test_every_sidecar_records_the_mean_overlap_the_census_reads_from_the_saved_state(case, tmp_path, stage):
+    """The sidecar's overlap_end_d (ScGeom.penetrationDepth at the stage's last step) is the census's
+    (positions of the saved state): the same contacts, one integration step apart."""
+    side = json.loads((case["dir"] / f"{stage}.json").read_text())["overlap_end_d"]
+    ov = census_of(case, tmp_path, stage)["overlap_d"]
+    assert abs(side["n"] - ov["n"]) <= 0.02 * ov["n"]
+    assert side["mean"] == pytest.approx(ov["mean"], rel=0.05)
+    assert side["median"] <= side["p90"] <= side["max"] < 0.05

@@ -9,12 +9,19 @@ import pytest
 from dem_study import stiffness
 
 
-def constructed_runs():
-    """Two kappas x 3 seeds: kappa 1e5 has |A| higher by 0.02 and X lower by 0.03, with known seed offsets."""
+BASE = dict(inertial_number=1e-3, dt_over_tc=0.3, contact_law="viscel", restitution=0.5)
+
+
+def constructed_runs(checks=()):
+    """Two kappas x 3 seeds: kappa 1e5 has |A| higher by 0.02 and X lower by 0.03, with known seed offsets;
+    ``checks``: settings at kappa 1e4 off the stiffness axis (dicts of what differs), the same values."""
     rows = []
-    for kappa, dA, dX in ((1e4, 0.0, 0.0), (1e5, 0.02, -0.03)):
+    settings = [(dict(BASE, kappa=1e4), 0.0, 0.0), (dict(BASE, kappa=1e5), 0.02, -0.03)]
+    settings += [(dict(BASE, kappa=1e4, **c), 0.0, 0.0) for c in checks]
+    for setting, dA, dX in settings:
+        kappa = setting["kappa"]
         for seed, e in zip((1, 2, 3), (-0.001, 0.0, 0.001)):
-            rows.append(dict(case=f"s{seed}", kappa=kappa, seed=seed, N=626, mu=0.27 + e, A_norm=0.085 + dA + e,
+            rows.append(dict(case=f"s{seed}", **setting, seed=seed, N=626, mu=0.27 + e, A_norm=0.085 + dA + e,
                              X=-0.08 + dX + e, theta_A_deg=137.0 + 10 * e, phi=0.81, Z=2.9 + e, A_min_early=0.01,
                              strain_at_A_min=0.05, mu_early=0.1, core_hours=0.1 * math.sqrt(kappa / 1e4),
                              core_hours_preshear=0.08, X_contract=-0.07 + dX + e, X_no_rattlers=-0.072 + dX + 2 * e))
@@ -31,6 +38,20 @@ def test_stiffness_table_gives_seed_means_and_distance_from_the_stiffest_in_stan
     assert t["z_X"].iloc[0] == pytest.approx(0.03 / (math.sqrt(2) * se))
     assert t["z_A_norm"].iloc[1] == 0
     assert t["core_hours_per_seed"].tolist() == pytest.approx([0.1, 0.1 * math.sqrt(10)])
+    assert t["on_axis"].all()
+
+
+def test_checks_off_the_axis_get_their_own_rows_and_the_axis_its_stiffest_reference():
+    """A finer time step and the other restitution law at kappa 1e4 are rows of their own, off the
+    axis; the z reference stays the axis's stiffest kappa, not the last row."""
+    t = stiffness.stiffness_table(constructed_runs(checks=[dict(dt_over_tc=0.15), dict(contact_law="frictvisco")]))
+    assert len(t) == 4 and t["seeds"].tolist() == [3, 3, 3, 3]
+    off = t[~t["on_axis"]]
+    assert sorted(off["dt_over_tc"]) == [0.15, 0.3] and set(off["kappa"]) == {1e4}
+    axis = t[t["on_axis"]].set_index("kappa")
+    assert axis.loc[1e5, "z_A_norm"] == 0
+    se = 0.001 / math.sqrt(3)
+    assert off["z_A_norm"].tolist() == pytest.approx([-0.02 / (math.sqrt(2) * se)] * 2)
 
 
 def test_fabric_readings_are_paired_by_seed_against_the_contracts():

@@ -142,10 +142,7 @@ def census(scene_path, state_path):
 
     F = yu.fabricTensor(extrema=[Vector3(-measure.BIG, y_lo, -measure.BIG), Vector3(measure.BIG, y_hi, measure.BIG)])[0]
     fab["series"] = dict(A_xx=float(F[0, 0]) - 0.5, A_xy=0.5 * (float(F[0, 1]) + float(F[1, 0])))
-    ov = sorted(r[5] / d for r in grain if r[6] > 0 and math.isfinite(r[5]))
-    q = (lambda p: ov[min(len(ov) - 1, int(p * len(ov)))]) if ov else (lambda p: math.nan)
-    ov_stats = dict(n=len(ov), mean=sum(ov) / len(ov) if ov else math.nan, median=q(0.5), p90=q(0.9),
-                   max=ov[-1] if ov else math.nan)
+    ov_stats = measure.overlap_stats([r[5] / d for r in grain if r[6] > 0 and math.isfinite(r[5])])
     return dict(state=os.path.abspath(state_path), kappa=scene["material"]["kappa"], N=N,
                 rattlers=len(ratt), rattler_fraction=len(ratt) / N, band=[y_lo / d, y_hi / d],
                 shear_sign=sign, overlap_d=ov_stats, fabric=fab, force_fraction=FORCE_FRACTION)

@@ -88,6 +88,33 @@ def max_overlap_d(d, smax):
     return ratio * smax / 2
 
 
+def overlap_stats(overlaps_d):
+    """Mean, median, 90th percentile, max and count of a list of overlaps (in d).
+
+    The paper states its stiffness as a mean overlap delta/d; kappa = kn/(p d) sets it
+    (docs/findings.md, "The stiffness axis in the campaign's cell": delta/d = 1.4-1.7/kappa).
+    """
+    ov = sorted(overlaps_d)
+    if not ov:
+        return dict(n=0, mean=math.nan, median=math.nan, p90=math.nan, max=math.nan)
+
+    def q(f):
+        return ov[min(len(ov) - 1, int(f * len(ov)))]
+
+    return dict(n=len(ov), mean=sum(ov) / len(ov), median=q(0.5), p90=q(0.9), max=ov[-1])
+
+
+def grain_overlaps_d(n_grains, d):
+    """Overlaps u_N / d of the grain-grain contacts that carry a normal force, now (ScGeom.penetrationDepth)."""
+    out = []
+    for i in O.interactions:
+        if not i.isReal or i.id1 >= n_grains or i.id2 >= n_grains:
+            continue
+        if float(i.phys.normalForce.norm()) > 0:
+            out.append(float(i.geom.penetrationDepth) / d)
+    return out
+
+
 def exact_max_overlap_d(d):
     best = 0.0
     for i in O.interactions:

@@ -73,7 +73,8 @@ class Outputs:
             resumed=st["resumed"], t_end=(O.time - st["t_origin"]) / T0, strain_end=st["strain"],
             gap_end=(w["y_top"] - w["y_bot"]) / d,
             sampling_steps=dict(fine=st["fine_every"], coarse=st["coarse_every"], every=st["every"]),
-            columns=self.columns())
+            columns=self.columns(),
+            overlap_end_d=measure.overlap_stats(measure.grain_overlaps_d(self.lay["N"], d)))
         if self.stage == "pack":
             excl = sc["sampling"]["bulk_exclusion_d"] * d
             b = self.bulk.measure(self.lay, w["y_bot"] + excl, w["y_top"] - excl, der["W"])
