@@ -11,7 +11,9 @@ A release folder ``data/<name>/`` holds, per case ``cases/<label>/``:
 - ``sidecars/<stage>.json``: the DEM stages' sidecars as YADE wrote them
   (provenance: the scene, its sha256, YADE's version, CPU and wall time, steps,
   N), restored verbatim, so the calibration, the comparison and the claims read
-  the same costs and disks as from the original results;
+  the same costs and disks as from the original results; with
+  ``preshear.census.json`` where the case has a contact census of its pre-shear's
+  final state (``yade_scripts/contact_census.py``);
 - ``preshear.final.yade.gz`` (optional): the pre-shear's final state, for new
   reversals branching from it;
 
@@ -48,6 +50,9 @@ PUBLISHED_DIR = "published"      # the campaign's own tables, for comparison wit
 STATE = "preshear.final.yade.gz"
 #: Stages whose sidecars every case has before its reversal runs.
 BASE_STAGES = ("pack", "preshear")
+#: A contact census of the pre-shear's final state (yade_scripts/contact_census.py), released with the
+#: sidecars where a case has one: the fabric readings and rattlers, which need the state to measure.
+CENSUS = "preshear.census"
 #: The code a DEM result depends on (its last commit is named in the manifest).
 DEM_CODE = ("yade_scripts", "campaign/scenes.py", "campaign/scene_spec.py")
 #: Results sub-folders a released case can come from (the campaign's, the bulk study's).
@@ -160,7 +165,7 @@ def _release_case(case_dir: Path, out: Path, with_state: bool) -> dict:
         runs.append({"file": f"{protocol}.csv.gz", "protocol": protocol, "reversals": reversals})
     stages = [*BASE_STAGES, *protocols]
     costs = {}
-    for stage in ["scene", *stages]:
+    for stage in ["scene", *stages, CENSUS]:
         src = case_dir / f"{stage}.json"
         if src.is_file():
             shutil.copyfile(src, out / "sidecars" / src.name)

@@ -4,6 +4,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import tempfile
 from pathlib import Path
 
 import yaml
@@ -113,10 +114,15 @@ def estimate(args) -> int:
 
 
 def stiffness_study(args) -> int:
-    for d in args.cases:
-        if not Path(d).is_dir():
-            raise analysis.StudyInputError(f"{d}: case folder (--cases) not found")
-    runs = stiffness.runs_table(args.cases, args.steady_window, args.early_strain)
+    if args.releases:
+        with tempfile.TemporaryDirectory(prefix="stiffness-") as tmp:
+            cases = stiffness.restore_releases(args.releases, tmp)
+            runs = stiffness.runs_table(cases, args.steady_window, args.early_strain)
+    else:
+        for d in args.cases:
+            if not Path(d).is_dir():
+                raise analysis.StudyInputError(f"{d}: case folder (--cases) not found")
+        runs = stiffness.runs_table(args.cases, args.steady_window, args.early_strain)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     table = stiffness.stiffness_table(runs)
@@ -155,8 +161,12 @@ def main(argv=None) -> int:
     e.add_argument("--cores", type=int, default=2)
     e.set_defaults(func=estimate)
     s = sub.add_parser("stiffness", help="steady state, early transient, overlap and cost against kappa")
-    s.add_argument("--cases", nargs="+", required=True,
-                   help="case folders (pre-shear and heaviside run, scene.json; any kappa, grouped by it)")
+    src = s.add_mutually_exclusive_group(required=True)
+    src.add_argument("--cases", nargs="+",
+                     help="case folders (pre-shear and heaviside run, scene.json; any setting, grouped by it)")
+    src.add_argument("--releases", nargs="+",
+                     help="data releases of such cases (data/stiffness-*): each is verified against its "
+                          "manifest and its cases restored into a scratch folder; no DEM engine needed")
     s.add_argument("--out", required=True, help="output folder")
     s.add_argument("--steady-window", type=float, default=0.6, help="pre-shear strain averaged for steady values")
     s.add_argument("--early-strain", type=float, default=0.1, help="strain after the reversal of the early transient")
@@ -164,6 +174,6 @@ def main(argv=None) -> int:
     args = p.parse_args(argv)
     try:
         return args.func(args)
-    except (analysis.StudyInputError, ValueError) as err:
+    except (analysis.StudyInputError, DEMInputError, ValueError) as err:
         print(f"dem_study {args.command}: error: {err}", file=sys.stderr)
         return 2

@@ -28,6 +28,7 @@ import numpy as np
 import pandas as pd
 
 from dem_contract import read_series, steady_values
+from dem_contract.release import read_manifest, require_intact, restore_case
 
 from .analysis import StudyInputError, mean_and_se, strain_edges
 from .bulk import load_case
@@ -78,6 +79,21 @@ def run_summary(case_dir, steady_window: float, early_strain: float, bin_width: 
             if "X" in f:
                 row[f"X_{name}"] = f["X"]
     return row
+
+
+def restore_releases(releases, into) -> list:
+    """Every case of the data releases ``releases``, restored as finished cases under ``into``.
+
+    Each release is checked against its manifest first (``require_intact``: an edited file
+    stops here, named); its cases go to ``<into>/<release name>/<label>/`` (labels repeat
+    across releases of one study: one release per setting).
+    """
+    out = []
+    for release in map(Path, releases):
+        require_intact(release)
+        for label in read_manifest(release)["cases"]:
+            out.append(restore_case(release, label, Path(into) / release.name / label))
+    return out
 
 
 def runs_table(case_dirs, steady_window: float, early_strain: float) -> pd.DataFrame:

@@ -317,3 +317,38 @@ def test_every_sidecar_records_the_mean_overlap_the_census_reads_from_the_saved_
     assert abs(side["n"] - ov["n"]) <= 0.02 * ov["n"]
     assert side["mean"] == pytest.approx(ov["mean"], rel=0.05)
     assert side["median"] <= side["p90"] <= side["max"] < 0.05
+
+
+def test_stiffness_study_from_a_release_equals_the_study_from_the_cases(case, tmp_path):
+    """The release carries the census beside the sidecars, so `dem_study stiffness --releases` (no YADE)
+    gives the per-run table the case folders give, readings and overlap included."""
+    import subprocess
+    import sys
+
+    import pandas as pd
+    import yaml
+
+    from dem_study import stiffness
+
+    label = "p100000_I0.01_s1"
+    cdir = tmp_path / "results" / "dem" / label
+    shutil.copytree(case["dir"], cdir)
+    shutil.copy(case["scene"], cdir / "scene.json")
+    r = yade(YS / "contact_census.py", cdir / "scene.json", cdir / "preshear.final.yade.gz",
+             "--out", cdir / stiffness.CENSUS)
+    assert r.returncode == 0, r.stderr[-2000:]
+    (tmp_path / "config.yaml").write_text(yaml.safe_dump({"campaign": "tiny"}))
+    out = {}
+    for how, args in (("cases", ["--cases", str(cdir)]), ("releases", ["--releases", str(tmp_path / "data" / "tiny")])):
+        if how == "releases":
+            made = subprocess.run([sys.executable, "-m", "dem_contract", "release", "--cases", str(cdir), "--config",
+                                   str(tmp_path / "config.yaml"), "--out", str(tmp_path / "data" / "tiny")],
+                                  capture_output=True, text=True)
+            assert made.returncode == 0, made.stderr
+            assert (tmp_path / "data" / "tiny" / "cases" / label / "sidecars" / stiffness.CENSUS).is_file()
+        run = subprocess.run([sys.executable, "-m", "dem_study", "stiffness", *args, "--out", str(tmp_path / how)],
+                             capture_output=True, text=True)
+        assert run.returncode == 0, run.stderr
+        out[how] = pd.read_csv(tmp_path / how / "stiffness_runs.csv")
+    assert "X_no_rattlers" in out["releases"] and "overlap_mean_d" in out["releases"]
+    pd.testing.assert_frame_equal(out["releases"], out["cases"])
