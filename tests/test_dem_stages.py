@@ -352,3 +352,28 @@ def test_stiffness_study_from_a_release_equals_the_study_from_the_cases(case, tm
         out[how] = pd.read_csv(tmp_path / how / "stiffness_runs.csv")
     assert "X_no_rattlers" in out["releases"] and "overlap_mean_d" in out["releases"]
     pd.testing.assert_frame_equal(out["releases"], out["cases"])
+
+
+@pytest.mark.slow
+def test_a_small_stiff_cell_is_not_refused_for_its_own_pressure_fluctuation(tmp_path):
+    """Kappa 1e5 (the campaign's stiffness) on the tiny cell: its wall pressure's 0.05-strain window means
+    depart from p by more than a bare tolerance of 1e-3 (the guard with pressure_noise_z = 0 stops the
+    run), while the default scale 2.5 sqrt(d/W) lets the same physical run finish."""
+    sc = make_scene()
+    sc["material"]["kappa"] = 1e5
+    sc["timestep"]["dt_over_tc"] = 0.3
+    sc["preshear"]["strain"] = 0.3
+    sc["guards"].update(pressure_tolerance=1e-3, pressure_window_strain=0.05)
+    scene = tmp_path / "scene.json"
+    scene.write_text(json.dumps(sc))
+    r = yade(RUN, scene, "pack", tmp_path / "case")
+    assert r.returncode == 0, r.stderr[-2000:]
+    shutil.copytree(tmp_path / "case", tmp_path / "bare")
+    r = yade(RUN, scene, "preshear", tmp_path / "case")
+    assert r.returncode == 0, r.stdout[-1000:] + r.stderr[-1000:]
+    assert json.loads((tmp_path / "case" / "preshear.json").read_text())["strain_end"] >= 0.3
+    sc["guards"]["pressure_noise_z"] = 0
+    bare = tmp_path / "bare.json"
+    bare.write_text(json.dumps(sc))
+    r = yade(RUN, bare, "preshear", tmp_path / "bare")
+    assert r.returncode == 3 and "wall pressure" in r.stderr, r.stdout[-1000:] + r.stderr[-1000:]
