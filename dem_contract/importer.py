@@ -1,12 +1,22 @@
 r"""Import DEM data the project did not make: minimal CSVs plus a YAML of case metadata -> the contract's layout.
 
 A user with shear-reversal runs from another simulator (or another cell)
-writes, per run, one CSV holding the whole history from the start of the
-pre-shear through its reversals, in the minimal columns ``MINIMAL_COLUMNS``
-(optional ones ``OPTIONAL_COLUMNS``), and one YAML file naming the cases, their
-runs and the strains at which each run reverses (docs/own-dem-data.md). This
-module writes them as the DEM stage would (docs/data-contract.md):
-``<out>/<label>/preshear.csv`` (the first run's rows up to its first reversal,
+brings them in the minimal columns ``MINIMAL_COLUMNS`` (optional ones
+``OPTIONAL_COLUMNS``) in one of two forms, per case, and one YAML file naming
+the cases, their runs and the strains at which each run reverses
+(docs/own-dem-data.md):
+
+- *one file per run* (``whole_history``): each CSV holds the run's whole
+  history, from the start of the pre-shear through its reversals;
+- *branched* (``branched_history``, a case with a ``preshear:`` file): the
+  pre-shear in its own CSV, and each run a branch from its saved state, its
+  CSV starting at the first reversal, its first row the state there (the
+  pre-shear's last row, ``on_pre_shear_clock``), its ``t`` and ``strain``
+  going on from the pre-shear's or restarting at 0 at the branch.
+
+This module writes them as the DEM stage would (docs/data-contract.md), the
+same files from either form for the same history:
+``<out>/<label>/preshear.csv`` (the pre-shear's rows up to the first reversal,
 the state just before it included), ``<out>/<label>/<protocol>.csv`` (each
 run's rows after its first reversal), their sidecars (``reversal_t``,
 ``reversal_strain``, ``reversals``; the costs when the YAML gives them) and a
@@ -17,13 +27,14 @@ calibration, the comparison and the claims read.
 Conventions of the minimal CSV (the contract's units, dimensionless):
 
 - ``t`` in :math:`d\sqrt{\rho/p}`, ``strain`` accumulated since the start of the
-  pre-shear (signed), ``gammadot`` in :math:`\sqrt{p/\rho}/d` (signed, the wall
-  speed difference over the gap), ``A_xx``, ``A_xy`` the deviatoric fabric
+  pre-shear (signed; a branch's may restart at 0 at the branch), ``gammadot``
+  in :math:`\sqrt{p/\rho}/d` (signed, the wall speed difference over the
+  gap), ``A_xx``, ``A_xy`` the deviatoric fabric
   (paper Eq. 1), ``sigma_xy`` and ``p`` in the imposed pressure (``p > 0`` in
   compression, ``sigma_xy`` with the sign of the rate in steady shear).
 - A pre-shear towards -x (a negative rate) is mirrored (x -> -x,
   ``derived.mirror_reversal``) into the contract's frame, where the pre-shear
-  shears towards +x.
+  shears towards +x (a branched case's branches with it).
 - A start from rest (a first row at t = 0 with ``gammadot`` = 0) is kept: the
   reader accepts the step of the wall speed from 0.
 - What the contract implies is checked on the input, each refusal naming the
@@ -520,5 +531,5 @@ def summary(case_dirs) -> str:
     return "\n".join(lines)
 
 
-__all__ = ["MINIMAL_COLUMNS", "OPTIONAL_COLUMNS", "load_metadata", "read_minimal", "reversal_rows",
-           "import_cases", "summary"]
+__all__ = ["MINIMAL_COLUMNS", "OPTIONAL_COLUMNS", "BRANCH_STATE_COLUMNS", "BRANCH_STATE_TOL", "BRANCH_CLOCK_TOL",
+           "load_metadata", "read_minimal", "reversal_rows", "on_pre_shear_clock", "import_cases", "summary"]
