@@ -16,8 +16,9 @@ imports ``dem_contract``).
 
 ``dem_contract.synthetic`` (it needs ``model``) writes model-made cases in the
 same layout, for tests and trial runs; ``dem_contract.importer`` (``python -m
-dem_contract import``) writes external runs, a minimal CSV per run and a YAML
-of case metadata, into it (docs/own-dem-data.md), holding them to the signs of
+dem_contract import``) writes external runs, a minimal CSV per run (or a
+pre-shear file and branches starting at the reversal) and a YAML of case
+metadata, into it (docs/own-dem-data.md), holding them to the signs of
 steady shear (``dem_contract.steady_signs``) and writing nothing unless every
 case is read back (``dem_contract.folders``).
 """

@@ -1,12 +1,22 @@
 r"""Import DEM data the project did not make: minimal CSVs plus a YAML of case metadata -> the contract's layout.
 
 A user with shear-reversal runs from another simulator (or another cell)
-writes, per run, one CSV holding the whole history from the start of the
-pre-shear through its reversals, in the minimal columns ``MINIMAL_COLUMNS``
-(optional ones ``OPTIONAL_COLUMNS``), and one YAML file naming the cases, their
-runs and the strains at which each run reverses (docs/own-dem-data.md). This
-module writes them as the DEM stage would (docs/data-contract.md):
-``<out>/<label>/preshear.csv`` (the first run's rows up to its first reversal,
+brings them in the minimal columns ``MINIMAL_COLUMNS`` (optional ones
+``OPTIONAL_COLUMNS``) in one of two forms, per case, and one YAML file naming
+the cases, their runs and the strains at which each run reverses
+(docs/own-dem-data.md):
+
+- *one file per run* (``whole_history``): each CSV holds the run's whole
+  history, from the start of the pre-shear through its reversals;
+- *branched* (``branched_history``, a case with a ``preshear:`` file): the
+  pre-shear in its own CSV, and each run a branch from its saved state, its
+  CSV starting at the first reversal, its first row the state there (the
+  pre-shear's last row, ``on_pre_shear_clock``), its ``t`` and ``strain``
+  going on from the pre-shear's or restarting at 0 at the branch.
+
+This module writes them as the DEM stage would (docs/data-contract.md), the
+same files from either form for the same history:
+``<out>/<label>/preshear.csv`` (the pre-shear's rows up to the first reversal,
 the state just before it included), ``<out>/<label>/<protocol>.csv`` (each
 run's rows after its first reversal), their sidecars (``reversal_t``,
 ``reversal_strain``, ``reversals``; the costs when the YAML gives them) and a
@@ -17,13 +27,14 @@ calibration, the comparison and the claims read.
 Conventions of the minimal CSV (the contract's units, dimensionless):
 
 - ``t`` in :math:`d\sqrt{\rho/p}`, ``strain`` accumulated since the start of the
-  pre-shear (signed), ``gammadot`` in :math:`\sqrt{p/\rho}/d` (signed, the wall
-  speed difference over the gap), ``A_xx``, ``A_xy`` the deviatoric fabric
+  pre-shear (signed; a branch's may restart at 0 at the branch), ``gammadot``
+  in :math:`\sqrt{p/\rho}/d` (signed, the wall speed difference over the
+  gap), ``A_xx``, ``A_xy`` the deviatoric fabric
   (paper Eq. 1), ``sigma_xy`` and ``p`` in the imposed pressure (``p > 0`` in
   compression, ``sigma_xy`` with the sign of the rate in steady shear).
 - A pre-shear towards -x (a negative rate) is mirrored (x -> -x,
   ``derived.mirror_reversal``) into the contract's frame, where the pre-shear
-  shears towards +x.
+  shears towards +x (a branched case's branches with it).
 - A start from rest (a first row at t = 0 with ``gammadot`` = 0) is kept: the
   reader accepts the step of the wall speed from 0.
 - What the contract implies is checked on the input, each refusal naming the
@@ -46,7 +57,7 @@ import numpy as np
 import pandas as pd
 import yaml
 
-from .derived import mirror_reversal, reversal_kinds, split_transients
+from .derived import MIRRORED_COLUMNS, mirror_reversal, reversal_kinds, split_transients
 from .folders import staged
 from .labels import case_label
 from .series import CONTRACT_COLUMNS, DEMInputError, check_stresses, read_series
@@ -109,6 +120,9 @@ def load_metadata(path) -> dict:
         if case["seed"] in seeds:
             _fail(where, f"seed {case['seed']} appears twice")
         seeds.add(case["seed"])
+        if "preshear" in case and not (isinstance(case["preshear"], str) and case["preshear"].strip()):
+            _fail(where, f"preshear = {case['preshear']!r}: expected the pre-shear's file, relative to the YAML "
+                         "(its runs then start at their reversal)")
         runs = case.get("runs")
         if not isinstance(runs, list) or not runs:
             _fail(where, "'runs' must be a non-empty list of {file, protocol, reversals}")
@@ -180,7 +194,7 @@ def read_minimal(path, cell=None) -> pd.DataFrame:
     return out[list(CONTRACT_COLUMNS)]
 
 
-def reversal_rows(data: pd.DataFrame, reversals, where) -> list:
+def reversal_rows(data: pd.DataFrame, reversals, where, step=None) -> list:
     r"""The row at which each reversal starts: the first row of its leg where the strain reaches its strain.
 
     Leg :math:`k` (before reversal :math:`k`) shears in direction :math:`d_k`
@@ -188,10 +202,23 @@ def reversal_rows(data: pd.DataFrame, reversals, where) -> list:
     first row :math:`i` after reversal :math:`k-1` with
     :math:`d_k(\gamma_i - \gamma_k) \ge -\tfrac12 \Delta\gamma`, where
     :math:`\Delta\gamma` is the median strain step of the run. The row must lie
-    within one strain step of the stated strain.
+    within one strain step of the stated strain. A reversal that gives ``t``
+    starts at the row at that time, exactly.
+
+    Parameters
+    ----------
+    data : pandas.DataFrame
+        The run (``t``, ``strain``), in the contract's frame.
+    reversals : list of dict
+        ``strain`` (and ``t``) of each reversal, in that frame.
+    where : str or Path
+        The run's file, for the message (rows are named as in ``data``).
+    step : float, optional
+        :math:`\Delta\gamma`; by default the median strain step of ``data`` (a
+        branch passes that of the whole history: the same rows as its one file).
     """
     s, t = data["strain"].to_numpy(float), data["t"].to_numpy(float)
-    step = float(np.median(np.abs(np.diff(s))))
+    step = float(np.median(np.abs(np.diff(s)))) if step is None else float(step)
     rows, lo, direction = [], 0, 1.0
     for k, rev in enumerate(reversals):
         target = float(rev["strain"])
@@ -262,47 +289,25 @@ def _write_case(meta, case, case_dir):
     if "N" in case or "N" in meta:
         common["N"] = int(case.get("N", meta.get("N")))
     costs = case.get("costs") or {}
-    pre_end = None
-    for j, run in enumerate(case["runs"]):
-        src = meta["_dir"] / run["file"]
-        data = read_minimal(src, cell)
-        rate = float(np.median(data["gammadot"].to_numpy()[: max(10, len(data) // 10)]))
-        mirrored = rate < 0
-        if mirrored:    # the contract's pre-shear shears towards +x
-            data = mirror_reversal(data)
-        revs = run["reversals"]
-        targets = [{**r, "strain": -float(r["strain"]) if mirrored else float(r["strain"])} for r in revs]
-        rows = reversal_rows(data, targets, src)
-        check_steady_signs(data.iloc[: rows[0] + 1], f"{src}: run {run['protocol']} of seed {case['seed']}")
-        start = rows[0]     # the run's file holds its rows after this one
-        if j == 0:
-            pre = data.iloc[: rows[0] + 1]
-            pre_end = (float(pre["t"].iloc[-1]), float(pre["strain"].iloc[-1]))
-            pre.to_csv(case_dir / "preshear.csv", index=False)
-            _sidecar(case_dir / "preshear.json", {**common, "stage": "preshear", "source_file": str(run["file"]),
-                                                  "mirrored": mirrored, **costs.get("preshear", {})})
-        else:           # one pre-shear per case: a later run starts where the first run's pre-shear ends
-            held = np.flatnonzero((data["t"].to_numpy(float) == pre_end[0])
-                                  & (data["strain"].to_numpy(float) == pre_end[1]))
-            if held.size:   # the run holds the pre-shear's last row (a data release): it starts there, unshifted,
-                start = int(held[-1])   # and may first go on shearing the pre-shear's way before it reverses
-            else:
-                t0, s0 = float(data["t"].iloc[start]), float(data["strain"].iloc[start])
-                data = data.assign(t=data["t"] - t0 + pre_end[0], strain=data["strain"] - s0 + pre_end[1])
+    pre, pre_source, runs = (branched_history if "preshear" in case else whole_history)(meta, case, cell)
+    pre.to_csv(case_dir / "preshear.csv", index=False)
+    _sidecar(case_dir / "preshear.json", {**common, "stage": "preshear", **pre_source, **costs.get("preshear", {})})
+    for run in runs:
+        protocol, data = run["run"]["protocol"], run["data"]
         t, s = data["t"].to_numpy(float), data["strain"].to_numpy(float)
         reversals = []
-        for k, (i, r) in enumerate(zip(rows, revs)):
-            transition = r.get("transition", "half_cosine" if run["protocol"] == "sinusoidal" else "heaviside")
+        for k, (i, r) in enumerate(zip(run["rows"], run["run"]["reversals"])):
+            transition = r.get("transition", "half_cosine" if protocol == "sinusoidal" else "heaviside")
             entry = {"t": float(t[i]), "strain": float(s[i]), "direction": -1 if k % 2 == 0 else 1,
                      "transition": transition}
             if transition == "half_cosine":
                 entry["transition_strain"] = float(r["transition_strain"])
             reversals.append(entry)
-        data.iloc[start + 1:].to_csv(case_dir / f"{run['protocol']}.csv", index=False)
-        side = {**common, "stage": run["protocol"], "source_file": str(run["file"]), "mirrored": mirrored,
+        data.iloc[run["start"] + 1:].to_csv(case_dir / f"{protocol}.csv", index=False)
+        side = {**common, "stage": protocol, "source_file": str(run["run"]["file"]), "mirrored": run["mirrored"],
                 "reversal_t": reversals[0]["t"], "reversal_strain": reversals[0]["strain"], "reversals": reversals,
-                **costs.get(run["protocol"], {})}
-        _sidecar(case_dir / f"{run['protocol']}.json", side)
+                **costs.get(protocol, {})}
+        _sidecar(case_dir / f"{protocol}.json", side)
     if "pack" in costs:
         _sidecar(case_dir / "pack.json", {**common, "stage": "pack", **costs["pack"]})
     scene = {"imported": True, "simulator": meta.get("simulator", "unknown"), "seed": case["seed"],
@@ -310,6 +315,195 @@ def _write_case(meta, case, case_dir):
     if cell:
         scene["geometry"] = {k: float(v) for k, v in cell.items()}
     _sidecar(case_dir / "scene.json", scene)
+
+
+def read_in_frame(meta, file, cell, mirror=None):
+    """A run file as a contract table in the contract's frame (its pre-shear towards +x).
+
+    Parameters
+    ----------
+    meta : dict
+        ``load_metadata``'s answer (``_dir``: the folder run files are relative to).
+    file : str
+        The file as the YAML names it.
+    cell : dict
+        The YAML's ``cell`` (``read_minimal``).
+    mirror : bool, optional
+        Whether to mirror (x -> -x); by default when the rate of the file's first
+        rows (``max(10, n/10)``) is negative, a pre-shear towards -x.
+
+    Returns
+    -------
+    tuple
+        The table, whether it was mirrored, and the file's path.
+    """
+    src = meta["_dir"] / file
+    data = read_minimal(src, cell)
+    if mirror is None:
+        mirror = float(np.median(data["gammadot"].to_numpy()[: max(10, len(data) // 10)])) < 0
+    return (mirror_reversal(data) if mirror else data), bool(mirror), src
+
+
+def in_frame(reversals, mirrored, t_shift=0.0, strain_shift=0.0) -> list:
+    """The YAML's reversals of a run in the frame of its table: mirrored with it, then shifted in strain (and t)."""
+    sign = -1.0 if mirrored else 1.0
+    return [{**r, "strain": sign * float(r["strain"]) + strain_shift}
+            | ({"t": float(r["t"]) + t_shift} if "t" in r else {}) for r in reversals]
+
+
+def whole_history(meta, case, cell):
+    """The runs of a case whose files each hold the whole history, from the start of the pre-shear on.
+
+    Returns
+    -------
+    tuple
+        The pre-shear (the first run's rows up to its first reversal, that row
+        included), its sidecar's ``source_file`` and ``mirrored``, and per run a
+        dict: ``run`` (its YAML entry), ``data`` (its table in the contract's frame,
+        on the pre-shear's clock and strain), ``rows`` (the row of each reversal),
+        ``start`` (the run's file holds the rows after this one) and ``mirrored``.
+    """
+    pre, pre_source, out = None, None, []
+    for run in case["runs"]:
+        data, mirrored, src = read_in_frame(meta, run["file"], cell)
+        rows = reversal_rows(data, in_frame(run["reversals"], mirrored), src)
+        check_steady_signs(data.iloc[: rows[0] + 1], f"{src}: run {run['protocol']} of seed {case['seed']}")
+        start = rows[0]
+        if pre is None:
+            pre, pre_source = data.iloc[: start + 1], {"source_file": str(run["file"]), "mirrored": mirrored}
+        else:   # one pre-shear per case: a later run starts where the first run's pre-shear ends
+            data, start = after_pre_shear(data, start, pre)
+        out.append({"run": run, "data": data, "rows": rows, "start": start, "mirrored": mirrored})
+    return pre, pre_source, out
+
+
+def after_pre_shear(data, start, pre):
+    """A later run of a whole-history case on the first run's pre-shear: its table and the row it starts after.
+
+    A run holding the pre-shear's last row (same ``t`` and ``strain``, as a data
+    release writes it) starts there, unshifted, and may first go on shearing the
+    pre-shear's way before it reverses; any other is shifted in ``t`` and
+    ``strain`` so that its first reversal's row lies at the pre-shear's end.
+    """
+    t_end, s_end = float(pre["t"].iloc[-1]), float(pre["strain"].iloc[-1])
+    held = np.flatnonzero((data["t"].to_numpy(float) == t_end) & (data["strain"].to_numpy(float) == s_end))
+    if held.size:
+        return data, int(held[-1])
+    t0, s0 = float(data["t"].iloc[start]), float(data["strain"].iloc[start])
+    return data.assign(t=data["t"] - t0 + t_end, strain=data["strain"] - s0 + s_end), start
+
+
+def branched_history(meta, case, cell):
+    """The runs of a branched case: the pre-shear in its own file, each run a branch starting at its reversal.
+
+    The pre-shear file's rate decides the mirror for every branch. Each branch's
+    first row is the state at the reversal (``on_pre_shear_clock``), the state
+    the pre-shear's last row holds; its first reversal is that row, and its
+    later ones are found on the branch's rows (``reversal_rows``, rows named as
+    in the branch's file).
+
+    Returns
+    -------
+    tuple
+        As ``whole_history``: the pre-shear, its sidecar's ``source_file`` and
+        ``mirrored``, and per run its dict (``data``: the pre-shear's rows
+        followed by the branch's after its first row).
+    """
+    pre, mirrored, pre_src = read_in_frame(meta, case["preshear"], cell)
+    check_steady_signs(pre, f"{pre_src}: the pre-shear of seed {case['seed']}")
+    out = []
+    for run in case["runs"]:
+        where = f"run {run['protocol']} of seed {case['seed']}"
+        branch, _, src = read_in_frame(meta, run["file"], cell, mirror=mirrored)
+        targets = in_frame(run["reversals"], mirrored)
+        check_first_reversal(branch, targets[0], f"{src}: {where}", mirrored)
+        branch, t_shift, s_shift = on_pre_shear_clock(pre, branch, f"{src}: {where}", pre_src, mirrored)
+        targets = [{**targets[0], "t": float(branch["t"].iloc[0])},
+                   *in_frame(run["reversals"][1:], mirrored, t_shift, s_shift)]
+        data = pd.concat([pre, branch.iloc[1:]], ignore_index=True)
+        rows = reversal_rows(branch, targets, src, step=float(np.median(np.abs(np.diff(data["strain"].to_numpy())))))
+        out.append({"run": run, "data": data, "rows": [len(pre) - 1 + i for i in rows], "start": len(pre) - 1,
+                    "mirrored": mirrored})
+    return pre, {"source_file": str(case["preshear"]), "mirrored": mirrored}, out
+
+
+def check_first_reversal(branch, target, where, mirrored):
+    """A branch's first reversal is at its first row: the stated strain lies within one strain step of it."""
+    s = branch["strain"].to_numpy(float)
+    step = float(np.median(np.abs(np.diff(s))))
+    if abs(s[0] - target["strain"]) > 1.5 * step + 1e-12:
+        sign = -1.0 if mirrored else 1.0
+        _fail(where, f"reversal 1 at strain {sign * target['strain']:g}: a branch starts at its first reversal, "
+                     f"but its first data row is at strain {sign * s[0]:.6g}, more than a strain step "
+                     f"({step:.3g}) away (give the strain of the branch's first row)")
+
+
+#: Columns of a branch's first row that must hold the pre-shear's last row's state (``on_pre_shear_clock``).
+BRANCH_STATE_COLUMNS = ("A_xx", "A_xy", "sigma_xy", "p")
+#: How far they may differ, in their units (p for the stresses): a tenth of one sample's scatter in the
+#: fabric (docs/data-contract.md), room for a simulator writing four decimals; one state is one value.
+BRANCH_STATE_TOL = 1e-3
+#: How far a branch's first ``t`` (``strain``) may lie from the pre-shear's last one, or from 0 for a
+#: restarted clock, as a fraction of the branch's median time (strain) step: a row one sample away is a step.
+BRANCH_CLOCK_TOL = 1e-2
+
+
+def on_pre_shear_clock(pre, branch, where, pre_src, mirrored=False):
+    """A branch in the pre-shear's ``t`` and ``strain``, checked to start in the pre-shear's last state.
+
+    Each of ``t`` and ``strain`` either goes on from the pre-shear (the branch's
+    first row holds the pre-shear's last value: kept as it is) or restarts at 0
+    at the branch (shifted by the pre-shear's last value), within
+    ``BRANCH_CLOCK_TOL`` of the branch's median step; the columns
+    ``BRANCH_STATE_COLUMNS`` of the first row equal the pre-shear's last row's
+    within ``BRANCH_STATE_TOL`` (the state the branch starts from).
+
+    Parameters
+    ----------
+    pre, branch : pandas.DataFrame
+        The pre-shear and the branch, in the contract's frame (``read_in_frame``).
+    where, pre_src : str or Path
+        The branch's file and run, and the pre-shear's file, for the message.
+    mirrored : bool
+        Whether both were mirrored: the message gives the values as in the files.
+
+    Returns
+    -------
+    tuple
+        The branch on the pre-shear's clock and strain, and the shifts added to
+        its ``t`` and its ``strain``.
+
+    Raises
+    ------
+    DEMInputError
+        Naming the branch's file and run, the column, its first row's value and
+        the values allowed (the pre-shear's last, from ``pre_src``, or 0).
+    """
+    end, first = pre.iloc[-1], branch.iloc[0]
+    as_in_file = {c: -1.0 if mirrored and c in MIRRORED_COLUMNS else 1.0
+                  for c in ("t", "strain", *BRANCH_STATE_COLUMNS)}
+    shifts = []
+    for col in ("t", "strain"):
+        tol = BRANCH_CLOCK_TOL * float(np.median(np.abs(np.diff(branch[col].to_numpy(float)))))
+        if abs(first[col] - end[col]) <= tol:
+            shifts.append(0.0)
+        elif abs(first[col]) <= tol:
+            shifts.append(float(end[col]))
+        else:
+            _fail(where, f"column '{col}' = {as_in_file[col] * first[col]:.9g} in the first data row: a branch's "
+                         f"first row is the state at the reversal, its {col} the pre-shear's last "
+                         f"({as_in_file[col] * end[col]:.9g}, {pre_src}) or 0 "
+                         f"(restarted at the branch), within {tol:.3g}")
+    for col in BRANCH_STATE_COLUMNS:
+        if not abs(first[col] - end[col]) <= BRANCH_STATE_TOL:
+            _fail(where, f"column '{col}' = {as_in_file[col] * first[col]:.6g} in the first data row, the "
+                         f"pre-shear's last row ({pre_src}) {as_in_file[col] * end[col]:.6g}: a branch's first row "
+                         f"is the state at the reversal, the pre-shear's last, within {BRANCH_STATE_TOL:g} (is it "
+                         "the branch of this pre-shear?)")
+    t_shift, s_shift = shifts
+    if t_shift or s_shift:
+        branch = branch.assign(t=branch["t"] + t_shift, strain=branch["strain"] + s_shift)
+    return branch, t_shift, s_shift
 
 
 def _sidecar(path, content):
@@ -337,5 +531,5 @@ def summary(case_dirs) -> str:
     return "\n".join(lines)
 
 
-__all__ = ["MINIMAL_COLUMNS", "OPTIONAL_COLUMNS", "load_metadata", "read_minimal", "reversal_rows",
-           "import_cases", "summary"]
+__all__ = ["MINIMAL_COLUMNS", "OPTIONAL_COLUMNS", "BRANCH_STATE_COLUMNS", "BRANCH_STATE_TOL", "BRANCH_CLOCK_TOL",
+           "load_metadata", "read_minimal", "reversal_rows", "on_pre_shear_clock", "import_cases", "summary"]

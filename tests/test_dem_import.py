@@ -304,3 +304,106 @@ def test_a_second_import_replaces_its_cases_and_keeps_the_others(tmp_path):
     assert run_main("dem_contract.__main__", ["import", "--meta", meta, "--out", out]).returncode == 0
     assert sorted(p.name for p in out.iterdir()) == ["p100000_I0.001_s1", "p1_I0.001_s9"]
     assert sorted(p.name for p in (out / "p100000_I0.001_s1").glob("*.csv")) == ["heaviside.csv", "preshear.csv"]
+
+
+# --------------------------------------------------------------------------- branched runs: a pre-shear file, branches
+
+
+def as_branches(meta: Path, restart=False) -> Path:
+    """The one-file-per-run case of ``write_external`` (one seed) as a user with branched runs brings it.
+
+    The pre-shear in its own file (the rows up to the first reversal, that row included) and each run as a
+    branch from the reversal on (its first row the state at the reversal); with ``restart``, the branches'
+    ``t`` and ``strain`` start at 0 and their reversal strains are counted from the branch. Returns the YAML.
+    """
+    text = yaml.safe_load(meta.read_text())
+    (case,) = text["cases"]
+    n_pre = len(pd.read_csv(next((meta.parent.parent / "made").rglob("preshear.csv"))))
+    whole = pd.read_csv(meta.parent / case["runs"][0]["file"])
+    whole.iloc[:n_pre].to_csv(meta.parent / "seed1_preshear.csv", index=False)
+    case["preshear"] = "seed1_preshear.csv"
+    for run in case["runs"]:
+        branch = pd.read_csv(meta.parent / run["file"]).iloc[n_pre - 1:].reset_index(drop=True)
+        if restart:
+            s0 = branch["strain"].iloc[0]
+            branch = branch.assign(t=branch["t"] - branch["t"].iloc[0], strain=branch["strain"] - s0)
+            run["reversals"] = [{**r, "strain": float(r["strain"] - s0)} for r in run["reversals"]]
+        run["file"] = run["file"].replace(".csv", "_branch.csv")
+        branch.to_csv(meta.parent / run["file"], index=False)
+    out = meta.with_name("branched.yaml")
+    out.write_text(yaml.safe_dump(text, sort_keys=False))
+    return out
+
+
+def contract_files(case: Path) -> dict:
+    """The files of an imported case: CSVs as bytes, sidecars as dicts without ``source_file``."""
+    return {p.name: p.read_bytes() if p.suffix == ".csv" else
+            {k: v for k, v in json.loads(p.read_text()).items() if k != "source_file"}
+            for p in sorted(case.iterdir())}
+
+
+@pytest.mark.parametrize("mirror", [False, True], ids=["towards +x", "towards -x"])
+def test_one_history_as_one_file_per_run_or_as_pre_shear_and_branches_imports_to_the_same_files(tmp_path, mirror):
+    """A Heaviside, a sinusoidal and a double reversal of one seed: the branched form writes the same bytes."""
+    meta = write_external(tmp_path, seeds=(1,), protocols=("heaviside", "sinusoidal"), schedules=SCHEDULES,
+                          mirror=mirror)
+    (one,) = import_cases(meta, tmp_path / "one")
+    (branched,) = import_cases(as_branches(meta), tmp_path / "branched")
+    assert contract_files(branched) == contract_files(one)
+    assert len(contract_files(one)) == 9            # the pre-shear and three runs, their sidecars, scene.json
+    assert json.loads((branched / "preshear.json").read_text())["source_file"] == "seed1_preshear.csv"
+
+
+def test_branches_whose_clock_and_strain_restart_at_zero_import_on_the_pre_shears(tmp_path):
+    meta = write_external(tmp_path, seeds=(1,), protocols=("heaviside",), schedules=SCHEDULES, mirror=True)
+    (one,) = import_cases(meta, tmp_path / "one")
+    (branched,) = import_cases(as_branches(meta, restart=True), tmp_path / "branched")
+    for name in ("preshear", "heaviside", "double"):
+        a, b = pd.read_csv(one / f"{name}.csv"), pd.read_csv(branched / f"{name}.csv")
+        assert list(a.columns) == list(b.columns)
+        assert np.allclose(a.to_numpy(float), b.to_numpy(float), rtol=1e-12, atol=1e-12, equal_nan=True)
+        side_a, side_b = (json.loads((d / f"{name}.json").read_text()) for d in (one, branched))
+        assert [(r["t"], r["strain"]) for r in side_b.get("reversals", [])] == \
+            [(pytest.approx(r["t"], abs=1e-12), pytest.approx(r["strain"], abs=1e-12)) for r in side_a.get("reversals", [])]
+
+
+def late_by_a_row(text, ext):
+    branch = pd.read_csv(ext / "seed1_heaviside_branch.csv")
+    branch.iloc[1:].to_csv(ext / "seed1_heaviside_branch.csv", index=False)
+
+
+def from_another_state(text, ext):
+    branch = pd.read_csv(ext / "seed1_heaviside_branch.csv")
+    branch.loc[0, "A_xy"] -= 0.01
+    branch.to_csv(ext / "seed1_heaviside_branch.csv", index=False)
+
+
+def reversing_elsewhere(text, ext):
+    text["cases"][0]["runs"][0]["reversals"][0]["strain"] = 1.5
+
+
+def no_file_name(text, ext):
+    text["cases"][0]["preshear"] = 3
+
+
+@pytest.mark.parametrize("edit, words", [
+    (late_by_a_row, r"seed1_heaviside_branch\.csv: run heaviside of seed 1: column 't' = [\d.]+ in the first data "
+                    r"row: a branch's first row is the state at the reversal, its t the pre-shear's last \([\d.]+, "
+                    r".*seed1_preshear\.csv\) or 0"),
+    (from_another_state, r"seed1_heaviside_branch\.csv: run heaviside of seed 1: column 'A_xy' = -?[\d.]+ in the "
+                         r"first data row, the pre-shear's last row \(.*seed1_preshear\.csv\) -?[\d.]+"),
+    (reversing_elsewhere, r"seed1_heaviside_branch\.csv: run heaviside of seed 1: reversal 1 at strain 1\.5: a "
+                          r"branch starts at its first reversal, but its first data row is at strain 2"),
+    (no_file_name, r"branched\.yaml: cases\[0\]: preshear = 3: expected the pre-shear's file"),
+], ids=["a row late", "another state", "first reversal elsewhere", "preshear not a file name"])
+def test_import_refuses_a_branch_that_does_not_start_at_the_pre_shears_end_naming_file_column_and_run(
+        tmp_path, edit, words):
+    ext = write_external(tmp_path, seeds=(1,), protocols=("heaviside",)).parent
+    meta = as_branches(ext / "case.yaml")
+    text = yaml.safe_load(meta.read_text())
+    edit(text, ext)
+    meta.write_text(yaml.safe_dump(text, sort_keys=False))
+    done = run_main("dem_contract.__main__", ["import", "--meta", meta, "--out", tmp_path / "dem"])
+    assert done.returncode == 2
+    assert re.search(words, done.stderr), done.stderr
+    assert not (tmp_path / "dem").exists()

@@ -9,9 +9,12 @@ import math
 import shutil
 
 import numpy as np
+import pandas as pd
 import pytest
+import yaml
 
-from dem_contract import fabric_angle_deg, fabric_norm
+from dem_contract import fabric_angle_deg, fabric_norm, read_series, split_transients
+from dem_contract.importer import MINIMAL_COLUMNS, import_cases
 from tests.helpers import (RUN, YS, assert_pack_restored_the_grains_own_friction_and_damping,
                            assert_resumed_without_gap_or_duplicate, kill_preshear_after_first_checkpoint,
                            make_scene, read, run_all_stages, yade)
@@ -377,3 +380,41 @@ def test_a_small_stiff_cell_is_not_refused_for_its_own_pressure_fluctuation(tmp_
     bare.write_text(json.dumps(sc))
     r = yade(RUN, bare, "preshear", tmp_path / "bare")
     assert r.returncode == 3 and "wall pressure" in r.stderr, r.stdout[-1000:] + r.stderr[-1000:]
+
+@pytest.mark.yade
+def test_a_real_branched_run_imports_as_it_is_to_the_dems_own_values(case, tmp_path):
+    """The Heaviside and sinusoidal stages branch from the pre-shear's saved state (preshear.final.yade.gz),
+    as most YADE scripts run their reversals. Given to ``dem_contract import`` as a user brings them, in the
+    minimal columns, the pre-shear as its own file and each reversal as a branch whose first row is the state
+    at the reversal (the pre-shear's last row: YADE writes no row at the start of a stage), the import reads
+    back through the contract's reader with the DEM's reversal and the DEM's own values."""
+    d, scene = case["dir"], json.loads(case["scene"].read_text())
+    pre = pd.read_csv(d / "preshear.csv")
+    pre[list(MINIMAL_COLUMNS)].to_csv(tmp_path / "pre.csv", index=False)
+    runs = []
+    for protocol in ("heaviside", "sinusoidal"):
+        side = json.loads((d / f"{protocol}.json").read_text())
+        assert side["reversal_t"] == pre["t"].iloc[-1]          # the branch starts where the pre-shear's rows end
+        branch = pd.concat([pre.iloc[-1:], pd.read_csv(d / f"{protocol}.csv")], ignore_index=True)
+        branch[list(MINIMAL_COLUMNS)].to_csv(tmp_path / f"{protocol}_branch.csv", index=False)
+        rev = {"strain": side["reversal_strain"]}
+        if protocol == "sinusoidal":
+            rev.update(transition="half_cosine", transition_strain=scene["sinusoidal"]["transition_strain"])
+        runs.append({"file": f"{protocol}_branch.csv", "protocol": protocol, "reversals": [rev]})
+    meta = {"pressure": scene["material"]["pressure"], "inertial_number": scene["loading"]["inertial_number"],
+            "simulator": "YADE", "cell": {"H_over_d": scene["geometry"]["H_over_d"]},
+            "cases": [{"seed": scene["seed"], "preshear": "pre.csv", "runs": runs}]}
+    (tmp_path / "case.yaml").write_text(yaml.safe_dump(meta, sort_keys=False))
+    (out,) = import_cases(tmp_path / "case.yaml", tmp_path / "dem")
+    got_pre = read_series(out / "preshear.csv", finite=[*MINIMAL_COLUMNS, "mu"])
+    assert got_pre[list(MINIMAL_COLUMNS)].equals(pre[list(MINIMAL_COLUMNS)])
+    for protocol in ("heaviside", "sinusoidal"):
+        dem, dem_side = read_series(d / f"{protocol}.csv"), json.loads((d / f"{protocol}.json").read_text())
+        got, got_side = read_series(out / f"{protocol}.csv", finite=[*MINIMAL_COLUMNS, "mu"]), json.loads((out / f"{protocol}.json").read_text())
+        assert got[list(MINIMAL_COLUMNS)].equals(dem[list(MINIMAL_COLUMNS)])
+        assert np.allclose(got["mu"], dem["mu"], rtol=1e-12, atol=0)
+        (mine,) = split_transients(got_pre, got, got_side, what=protocol)
+        (own,) = split_transients(read_series(d / "preshear.csv"), dem, dem_side, what=protocol)
+        assert (mine.t0, mine.strain0) == (own.t0, own.strain0) == (dem_side["reversal_t"], dem_side["reversal_strain"])
+        assert mine.data[list(MINIMAL_COLUMNS)].equals(own.data[list(MINIMAL_COLUMNS)])
+        assert mine.initial == pytest.approx(own.initial, rel=1e-12, abs=1e-15)
