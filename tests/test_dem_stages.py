@@ -381,6 +381,7 @@ def test_a_small_stiff_cell_is_not_refused_for_its_own_pressure_fluctuation(tmp_
     r = yade(RUN, bare, "preshear", tmp_path / "bare")
     assert r.returncode == 3 and "wall pressure" in r.stderr, r.stdout[-1000:] + r.stderr[-1000:]
 
+
 @pytest.mark.yade
 def test_a_real_branched_run_imports_as_it_is_to_the_dems_own_values(case, tmp_path):
     """The Heaviside and sinusoidal stages branch from the pre-shear's saved state (preshear.final.yade.gz),
