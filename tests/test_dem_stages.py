@@ -328,9 +328,6 @@ def test_stiffness_study_from_a_release_equals_the_study_from_the_cases(case, tm
     import subprocess
     import sys
 
-    import pandas as pd
-    import yaml
-
     from dem_study import stiffness
 
     label = "p100000_I0.01_s1"
