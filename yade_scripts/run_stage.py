@@ -57,6 +57,10 @@ def main(argv):
     except scenemod.SceneError as e:
         print(e, file=sys.stderr)
         return 2
+    if scenemod.engine(scene) != "yade":
+        print(f"scene error: {scenemod.ENGINE} = {scenemod.engine(scene)!r}: this scene is for lammps_scripts/run_stage.py "
+              f"(yade_scripts/ runs {scenemod.ENGINE} = 'yade' or no {scenemod.ENGINE} key)", file=sys.stderr)
+        return 2
 
     said = []  # the lock's lines (a stale lock taken over) go to the log, once it is open
     lock = stagelock.StageLock(case_dir, stage, log=said.append)
