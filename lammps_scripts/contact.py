@@ -10,8 +10,9 @@ LAMMPS's linear spring-dashpot (Brilliantov et al.; LAMMPS manual, pair gran/hoo
 with m_eff = m_i m_j / (m_i + m_j). The dashpot is proportional to the pair's mass at a
 fixed gamma_n, so its damping ratio zeta = (gamma_n / 2) sqrt(m_eff / k_n) and with it the
 restitution e = exp(-pi zeta / sqrt(1 - zeta^2)) vary over the pairs. gamma_n is set so that
-the reference pair, two disks of diameter d (m_eff = m_d / 2), has the scene's restitution,
-as YADE's ViscElMat gives every pair: zeta_ref = beta = -ln e / sqrt(pi^2 + ln^2 e).
+the reference pair, two disks of diameter d (m_eff = m_d / 2), rebounds with the scene's
+restitution at the scene's time step (`reference_gamma_n`), as YADE's ViscElMat gives every
+pair its restitution.
 """
 import math
 
@@ -19,21 +20,67 @@ import math
 DAMPFLAG = {"viscel": 1, "frictvisco": 0}
 
 
-def damping_ratio(e):
-    """beta = -ln e / sqrt(pi^2 + ln^2 e): the damping ratio of a linear spring-dashpot of restitution e."""
-    return -math.log(e) / math.sqrt(math.pi**2 + math.log(e) ** 2)
-
-
 def reference_mass(der):
     """m_eff of the reference pair, two disks of diameter d: m_d / 2."""
     return der["m_d"] / 2
 
 
+PHASES = 8  # impact phases within a step over which a restitution is averaged
+
+
+def rebound(kn, meff, gamma_n, dt, clamp, phase=0.0, v=1.0):
+    """Restitution of a head-on collision of the linear spring-dashpot, integrated as LAMMPS does.
+
+    The relative coordinate under m_eff ddot(delta) = -F, F = k_n delta - m_eff gamma_n dot(delta)
+    (F clamped at >= 0 when ``clamp``, `limit_damping`) at speed v, from a gap of phase v dt, with
+    velocity Verlet at the step dt (fix nve/sphere: half kick, drift, force, half kick);
+    e = v_out / v. At dt = 0.1 sqrt(m_d/kn) e depends on where in a step the contact begins (by up
+    to 0.03 with the clamp): `mean_rebound` averages over PHASES of them.
+    """
+    x, u = -phase * v * dt, v  # overlap and its rate
+    f = 0.0
+    for _ in range(10**6):
+        u -= 0.5 * dt * f / meff
+        x += dt * u
+        f = kn * x + meff * gamma_n * u if x > 0 else 0.0
+        if clamp:
+            f = max(f, 0.0)
+        u -= 0.5 * dt * f / meff
+        if x <= 0 and u < 0:
+            return -u / v
+    raise RuntimeError("the two disks never separate: the dashpot is overdamped")
+
+
+def mean_rebound(kn, meff, gamma_n, dt, clamp):
+    """`rebound` averaged over PHASES impact phases k / PHASES, k = 0 .. PHASES - 1."""
+    return sum(rebound(kn, meff, gamma_n, dt, clamp, k / PHASES) for k in range(PHASES)) / PHASES
+
+
+def reference_gamma_n(scene, der):
+    """gamma_n (1/s) with which two disks of diameter d rebound with material.restitution at the
+    scene's dt on average over the impact phases (`mean_rebound`, the clamp as the contact law), by bisection on the damping ratio
+    zeta = (gamma_n / 2) sqrt(m_ref / k_n) in [0, 0.99] (continuous time without the clamp:
+    e = exp(-pi zeta / sqrt(1 - zeta^2)); the clamp and the step raise e a little at a given zeta)."""
+    m = scene["material"]
+    e, kn, mref, dt = m["restitution"], der["kn"], reference_mass(der), der["dt"]
+    clamp = m["contact_law"] == "viscel"
+    scale = 2 * math.sqrt(kn / mref)  # gamma_n = zeta * scale
+    lo, hi = 0.0, 0.99
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        if mean_rebound(kn, mref, mid * scale, dt, clamp) > e:
+            lo = mid
+        else:
+            hi = mid
+    return 0.5 * (lo + hi) * scale
+
+
 def gran_hooke_history(scene, der, friction=None):
     """The arguments of `pair_style gran/hooke/history` for the scene (SI).
 
-    gamma_n = 2 beta sqrt(k_n / m_ref), gamma_t = 2 beta sqrt(k_t / m_ref) (1/s): the reference
-    pair's normal and tangential dashpots are those of YADE's ViscElMat with en = et = e.
+    gamma_n = reference_gamma_n (the reference pair rebounds with e at dt), gamma_t =
+    gamma_n sqrt(k_t / k_n) (1/s): the reference pair's tangential dashpot has the damping ratio of
+    its normal one, as YADE's ViscElMat with en = et = e.
     material.contact_law viscel: tangential dashpot on (dampflag 1) and the normal force clamped
     at zero (`limit_damping`), as Law2_ScGeom_ViscElPhys_Basic; frictvisco: neither, as
     Law2_ScGeom_FrictViscoPhys_CundallStrackVisco.
@@ -50,11 +97,10 @@ def gran_hooke_history(scene, der, friction=None):
         the pair_style line.
     """
     m = scene["material"]
-    beta = damping_ratio(m["restitution"])
-    mref = reference_mass(der)
+    gamma_n = reference_gamma_n(scene, der)
     law = m["contact_law"]
-    out = dict(kn=der["kn"], kt=der["kt"], gamma_n=2 * beta * math.sqrt(der["kn"] / mref),
-               gamma_t=2 * beta * math.sqrt(der["kt"] / mref), xmu=m["friction"] if friction is None else friction,
+    out = dict(kn=der["kn"], kt=der["kt"], gamma_n=gamma_n, gamma_t=gamma_n * math.sqrt(der["kt"] / der["kn"]),
+               xmu=m["friction"] if friction is None else friction,
                dampflag=DAMPFLAG[law], limit_damping=law == "viscel")
     out["command"] = ("pair_style gran/hooke/history {kn!r} {kt!r} {gamma_n!r} {gamma_t!r} {xmu!r} {dampflag}"
                       .format(**out) + (" limit_damping" if out["limit_damping"] else ""))
@@ -66,10 +112,9 @@ def disk_mass(der, D):
     return der["rho"] * math.pi * D**2 / 4 * der["d"]
 
 
-def pair_restitution(scene, der, D1, D2):
-    """The restitution gran/hooke/history gives two grains of diameters D1, D2 (m), in continuous time:
-    e = exp(-pi zeta / sqrt(1 - zeta^2)), zeta = (gamma_n / 2) sqrt(m_eff / k_n) (the clamp of the
-    normal force at zero and the time step change it slightly: tools/lammps_restitution.py measures it)."""
+def pair_restitution(scene, der, D1, D2, gamma_n=None):
+    """The restitution gran/hooke/history gives two grains of diameters D1, D2 (m) at the scene's dt
+    (`mean_rebound` with their m_eff; tools/lammps_restitution.py measures it in LAMMPS)."""
     m1, m2 = disk_mass(der, D1), disk_mass(der, D2)
-    zeta = gran_hooke_history(scene, der)["gamma_n"] / 2 * math.sqrt(m1 * m2 / (m1 + m2) / der["kn"])
-    return math.exp(-math.pi * zeta / math.sqrt(1 - zeta**2)) if zeta < 1 else 0.0
+    gamma_n = reference_gamma_n(scene, der) if gamma_n is None else gamma_n
+    return mean_rebound(der["kn"], m1 * m2 / (m1 + m2), gamma_n, der["dt"], scene["material"]["contact_law"] == "viscel")

@@ -95,3 +95,12 @@ def wall_cell(scene, der):
     return dict(diameters=diam, positions=pos, H0=H0, y_bottom=y_bottom, y_top=y_top,
                 bottom=[((i + 0.5) * s, y_bottom) for i in range(n_w)],
                 top=[(i * s, y_top) for i in range(n_w)])
+
+
+def pair_sizes(scene, n=5):
+    """Pairs (D1, D2), in d, of ``n`` diameters evenly spaced over [size_ratio_min, size_ratio_max]
+    (and d itself): every pair size the polydispersity allows, for the two-disk restitution tests."""
+    m = scene["material"]
+    lo, hi = m["size_ratio_min"], m["size_ratio_max"]
+    sizes = sorted({round(lo + (hi - lo) * k / (n - 1), 12) for k in range(n)} | {1.0})
+    return [(a, b) for i, a in enumerate(sizes) for b in sizes[i:]]
