@@ -136,3 +136,40 @@ def test_each_runner_refuses_the_other_engines_scene(tmp_path):
     p.write_text(json.dumps(lammps_scene()))
     r = yade(RUN, p, "pack", tmp_path / "b")
     assert r.returncode == 2 and "engine = 'lammps'" in r.stderr and "lammps_scripts/run_stage.py" in r.stderr
+
+
+def test_the_workflow_runs_a_lammps_stage_as_one_job_with_its_restart_file_between_stages(tmp_path):
+    """engine: lammps in the config: every DEM stage is one job of lammps_scripts/run_stage.py, its
+    arguments quoted, and a stage's input is the previous one's LAMMPS restart file."""
+    import yaml
+
+    from tests.helpers import TINY, dry_run, workflow_copy
+
+    path = tmp_path / "config.yaml"
+    path.write_text(yaml.safe_dump({**TINY, "engine": "lammps"}))
+    target = "results/dem/p100000_I0.01_s1/heaviside.csv"
+    r = dry_run(target, "--configfile", path, "-p", cwd=workflow_copy(tmp_path / "workflow"), quiet=False)
+    assert r.returncode == 0, r.stderr[-3000:]
+    cmds = [ln for ln in r.stdout.splitlines() if "run_stage.py" in ln]
+    assert len(cmds) == 3 and all("python3 lammps_scripts/run_stage.py" in c for c in cmds), cmds
+    assert "preshear.final.lammps" in r.stdout and "yade" not in " ".join(cmds)
+
+
+@pytest.mark.parametrize("change, expected", [
+    (dict(protocols={"heaviside": {"strain": 0.05}, "sinusoidal": {"strain": 0.05, "transition_strain": 0.01}}),
+     "config error: protocols.sinusoidal = {...}: the lammps engine does not run this protocol yet"),
+    (dict(cell={"H_over_d": 10, "W_over_H": 1, "kind": "periodic"}), "cell.kind = 'periodic' (supported: walls"),
+    (dict(effects={"damping": 0.1}), "effects.damping = 0.1 (supported: 0"),
+])
+def test_the_preflight_refuses_what_the_lammps_engine_cannot_run_naming_the_key(change, expected):
+    import copy
+
+    from preflight.checks import check
+    from tests.helpers import TINY
+
+    config = {**copy.deepcopy(TINY), "engine": "lammps", **change}
+    if "kind" in config["cell"]:
+        config["sampling"] = {k: v for k, v in config["sampling"].items() if k != "bulk_exclusion_d"}
+    problems = check(config)
+    assert any(expected in p for p in problems), problems
+    assert check({**copy.deepcopy(TINY), "engine": "lammps"}) == []
