@@ -74,6 +74,7 @@ class Packing:
                 st["pack_ok"] = 0
                 st["friction"] = self.scene["material"]["friction"]
                 cell.set_friction(self.lmp, self.scene, der, st["friction"])
+                self.setup_needed = True  # a new pair style's settings: LAMMPS's setup before the next run
                 if pk["quench"]:
                     cell.quench_grains(self.lmp)
         elif st["phase"] == "settle":

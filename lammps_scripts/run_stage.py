@@ -35,21 +35,19 @@ def run(scene, sha, stage, case_dir, renew):
         print(f"LAMMPS not found: {e}", file=sys.stderr)
         return 2
     st = stages.Stage(scene, sha, stage, case_dir)
+
+    def work():
+        try:
+            st.prepare()
+            st.run(renew)
+        finally:
+            st.close()
+
     try:
-        st.prepare()
-        st.run(renew)
+        return stagecli.exit_code(work)
     except lammpslib.LammpsNotFound as e:
         print(f"LAMMPS not found: {e}", file=sys.stderr)
         return 2
-    except stages.InputError as e:
-        print(f"input error: {e}", file=sys.stderr)
-        return 2
-    except stages.GuardError as e:
-        print(f"guard: {e}", file=sys.stderr)
-        return 3
-    finally:
-        st.close()
-    return 0
 
 
 if __name__ == "__main__":

@@ -7,7 +7,7 @@ import time
 import numpy as np
 
 import measure
-from rows import COLUMNS, fmt, pressure_guard_tolerance, wall_row
+from rows import COLUMNS, fmt, pressure_window_problem, wall_row
 from stageerrors import GuardError
 
 
@@ -69,20 +69,9 @@ class Sampling:
             raise GuardError(f"overlap {ov:.4f} d above guards.max_overlap_d = {g['max_overlap_d']:g} "
                              f"at step {it} (t = {row['t']:.4f})")
         if self.stage != "pack":
-            elapsed = (it - st["iter0"]) * der["dt"] * der["gammadot"]
-            win = st["window"]
-            win.append([elapsed, row["p"]])
-            span = g["pressure_window_strain"]
-            while win and win[0][0] < elapsed - span:
-                win.pop(0)
-            if elapsed >= span and len(win) >= 3:
-                pm = sum(x[1] for x in win) / len(win)
-                tol = pressure_guard_tolerance(g, der["W"] / d)
-                if abs(pm - 1) > tol:
-                    raise GuardError(f"wall pressure {pm:.4f} p on average over the last {span:g} strain, "
-                                     f"off by more than {tol:.3g} = max(guards.pressure_tolerance "
-                                     f"{g['pressure_tolerance']:g}, guards.pressure_noise_z "
-                                     f"{g['pressure_noise_z']:g} x sqrt(d/W))")
+            why = pressure_window_problem(st, g, der, it - st["iter0"], row["p"])
+            if why is not None:
+                raise GuardError(why)
 
     def progress(self, now):
         st = self.st

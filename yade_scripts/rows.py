@@ -75,6 +75,29 @@ def pressure_guard_tolerance(guards, W_over_d):
     return max(guards["pressure_tolerance"], guards["pressure_noise_z"] / W_over_d ** 0.5)
 
 
+def pressure_window_problem(st, guards, der, steps, p_row):
+    """The pressure guard: the row's wall pressure joins the window of the last
+    guards.pressure_window_strain of strain (st['window'], at nominal rate since the stage's
+    start, ``steps`` steps in); once the window is full (past st['guard_from'], a reversal's
+    restart) its mean must lie within ``pressure_guard_tolerance`` of p. Returns the guard's
+    message, or None."""
+    elapsed = steps * der["dt"] * der["gammadot"]
+    win = st["window"]
+    win.append([elapsed, p_row])
+    span = guards["pressure_window_strain"]
+    while win and win[0][0] < elapsed - span:
+        win.pop(0)
+    if elapsed - st.get("guard_from", 0.0) >= span and len(win) >= 3:
+        pm = sum(x[1] for x in win) / len(win)
+        tol = pressure_guard_tolerance(guards, der["W"] / der["d"])
+        if abs(pm - 1) > tol:
+            return (f"wall pressure {pm:.4f} p on average over the last {span:g} strain, "
+                    f"off by more than {tol:.3g} = max(guards.pressure_tolerance "
+                    f"{guards['pressure_tolerance']:g}, guards.pressure_noise_z "
+                    f"{guards['pressure_noise_z']:g} x sqrt(d/W))")
+    return None
+
+
 def overlap_stats(overlaps_d):
     """Mean, median, 90th percentile, max and count of a list of overlaps (in d).
 

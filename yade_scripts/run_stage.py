@@ -41,20 +41,13 @@ def run(scene, sha, stage, case_dir, renew):
     import stages  # YADE imports only once the scene is known to be good and the stage is ours
 
     stages.install_signal_handlers()
-    try:
+
+    def work():
         st = stages.Stage(scene, sha, stage, case_dir)
         st.prepare()
         st.run(renew)
-    except stages.InputError as e:
-        print(f"input error: {e}", file=sys.stderr)
-        return 2
-    except stages.GuardError as e:
-        print(f"guard: {e}", file=sys.stderr)
-        return 3
-    except stages.Interrupted as e:
-        print(f"interrupted: {e}", file=sys.stderr)
-        return 4
-    return 0
+
+    return stagecli.exit_code(work)
 
 
 if __name__ == "__main__":  # also under the launcher (`yade -x` runs a script as __main__)

@@ -15,6 +15,10 @@ import sys
 import scene as scenemod
 import stagelock
 import stagelog
+from stageerrors import GuardError, InputError, Interrupted
+
+#: A stage's failure -> (exit code, the message's prefix on stderr).
+EXITS = ((InputError, 2, "input error"), (GuardError, 3, "guard"), (Interrupted, 4, "interrupted"))
 
 RUNNERS = {"yade": "yade_scripts/run_stage.py", "lammps": "lammps_scripts/run_stage.py"}
 
@@ -48,6 +52,17 @@ class Renew:
         self.lock.touch()
         if self.log is not None:
             self.log.keep()
+
+
+def exit_code(work):
+    """Call ``work()``; 0, or the exit code of the stage failure it raised (EXITS), named on stderr."""
+    try:
+        work()
+    except tuple(cls for cls, _, _ in EXITS) as e:
+        code, what = next((c, w) for cls, c, w in EXITS if isinstance(e, cls))
+        print(f"{what}: {e}", file=sys.stderr)
+        return code
+    return 0
 
 
 def main(argv, engine, run):
