@@ -8,7 +8,7 @@ STAMP := $(VENV)/.installed
 # file with its line (Snakemake's own message has none), then every bad value, before any job.
 PREFLIGHT := $(PY) -m preflight check
 
-.PHONY: setup yade venv quick paper bench test test-all slurm-test lint clean
+.PHONY: setup yade lammps venv quick paper bench test test-all slurm-test lint clean
 
 # apt (YADE) and pip (.venv) are independent: on a fresh machine they download side by side.
 setup:
@@ -19,6 +19,18 @@ yade:
 	  if [ "$$(id -u)" = 0 ]; then apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq yade; \
 	  else echo "YADE missing: run 'sudo apt-get install yade' (Debian package)"; exit 1; fi; }
 
+# Debian's LAMMPS for the lammps engine (config `engine: lammps`) and its tests: `make test` and a
+# preset that asks for it install it, a YADE preset does not wait for it. The package ships
+# liblammps.so.0 only; lammps_scripts/lammpslib.py loads that name (no symbolic link needed).
+LAMMPS_PY := /usr/bin/python3
+lammps:
+	@$(LAMMPS_PY) -c "import lammps" 2>/dev/null && command -v lmp >/dev/null || { \
+	  if [ "$$(id -u)" = 0 ]; then apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq lammps python3-lammps; \
+	  else echo "LAMMPS missing: run 'sudo apt-get install lammps python3-lammps' (Debian packages)"; exit 1; fi; }
+
+# A preset's engine: LAMMPS installed first when the config file says `engine: lammps`.
+ENGINE_OF = if grep -Eq '^engine:[[:space:]]*lammps' $(1); then $(MAKE) --no-print-directory lammps; fi
+
 venv: $(STAMP)
 $(STAMP): requirements.txt
 	test -x $(PY) || python3 -m venv $(VENV)
@@ -28,12 +40,14 @@ $(STAMP): requirements.txt
 
 # The quick campaign: every figure and table of the study in results/ (its time: README, "The presets and what each costs").
 quick: setup
+	@$(call ENGINE_OF,config/quick.yaml)
 	$(PREFLIGHT) config/quick.yaml
 	$(VENV)/bin/snakemake -j2 --configfile config/quick.yaml
 	$(VENV)/bin/snakemake --configfile config/quick.yaml --report results/report.html
 
 # The paper's campaign (hours on 2 cores).
 paper: setup
+	@$(call ENGINE_OF,config/config.yaml)
 	$(PREFLIGHT) config/config.yaml
 	$(VENV)/bin/snakemake -j2
 	$(VENV)/bin/snakemake --report results/report.html
@@ -52,7 +66,7 @@ bench: setup
 # runs once), then the tests marked serial (a Slurm daemon, signal timing) alone. The tests
 # marked heavy (end-to-end tiny studies and releases, coverage studies) run in test-all.
 # On one core, without xdist: $(PY) -m pytest -q -p no:xdist
-test: setup
+test: setup lammps
 	$(PREFLIGHT) config/ci.yaml
 	$(VENV)/bin/lint-imports --no-cache
 	$(PY) -m pytest -q -n 2 --dist loadfile -m "not serial and not heavy"

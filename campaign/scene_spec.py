@@ -16,12 +16,23 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 @functools.lru_cache(maxsize=None)
-def yade_scripts_module(name: str, root=ROOT):
-    """The pure-Python ``yade_scripts/<name>.py`` (no YADE import), loaded from its file: yade_scripts is not a package."""
-    spec = importlib.util.spec_from_file_location(f"yade_scripts_{name}", Path(root) / "yade_scripts" / f"{name}.py")
+def scripts_module(folder: str, name: str, root=ROOT):
+    """The pure-Python ``<folder>/<name>.py`` of an engine's scripts (no YADE or LAMMPS import), loaded from its
+    file: yade_scripts and lammps_scripts are not packages."""
+    spec = importlib.util.spec_from_file_location(f"{folder}_{name}", Path(root) / folder / f"{name}.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
+
+
+def yade_scripts_module(name: str, root=ROOT):
+    """The pure-Python ``yade_scripts/<name>.py`` (``scripts_module``)."""
+    return scripts_module("yade_scripts", name, root)
+
+
+def lammps_refusals(root=ROOT):
+    """lammps_scripts/refusals.py: what the lammps engine does not run yet, by scene key."""
+    return scripts_module("lammps_scripts", "refusals", root)
 
 
 def scene_module(root=ROOT):

@@ -39,6 +39,8 @@ def scene_from_config(config: dict, case: dict, label: str) -> dict:
         "material": {**config["material"], "pressure": case["pressure"]},
         "loading": {"inertial_number": case["inertial_number"]},
     }
+    if config.get("engine", "yade") != "yade":   # a YADE scene stays as it was before engines existed (same rerun key)
+        scene["engine"] = config["engine"]
     if kind != "walls":   # a wall cell's scene stays as it was before cell kinds existed (same rerun key)
         scene["cell"] = {k: cell[k] for k in ("kind", "mass") if k in cell}
     for block in PASSTHROUGH:

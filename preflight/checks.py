@@ -14,7 +14,8 @@ workflow passes itself (``options``), where the results folder and the releases 
 (``paths``), and duplicated keys in the config file's text (``configfile``: a YAML
 loader otherwise lets the last one win). Last, every scene the
 campaign would write is checked by yade_scripts' own validator, so nothing the
-DEM would refuse reaches its first job.
+DEM would refuse reaches its first job, and with ``engine: lammps`` what
+lammps_scripts does not run yet is named (``engine_problems``).
 
 ``python -m preflight check CONFIGFILE...`` runs the same check outside Snakemake
 (it also names a missing or malformed file with its line).
@@ -29,7 +30,7 @@ from campaign import stage_options
 from campaign.calibration_sets import calibration_sets, same_value
 from campaign.cases import cases, rates
 from campaign.configfile import ConfigProblem, configfile_problems, load_configfile  # noqa: F401 (re-exported)
-from campaign.scene_spec import inertial_number_range, protocol_strain, scene_default, scene_module
+from campaign.scene_spec import inertial_number_range, lammps_refusals, protocol_strain, scene_default, scene_module
 from campaign.schema_defaults import SCHEMA, schema as read_schema
 from campaign.scenes import scene_from_config
 from dem_contract.labels import case_label, format_number
@@ -379,6 +380,25 @@ def scene_problems(config: dict, root=ROOT) -> list[str]:
     return out
 
 
+def engine_problems(config: dict, root=ROOT) -> list[str]:
+    """With ``engine: lammps``, what lammps_scripts does not run yet (lammps_scripts/refusals.py), by key:
+    protocols other than its stages, the bulk-vs-walls study, and every scene setting it refuses."""
+    engine = config.get("engine", "yade")
+    if engine != "lammps":
+        return []
+    mod = lammps_refusals(root)
+    out = [problem(f"protocols.{name}", None, "the lammps engine does not run this protocol yet (it runs "
+                   f"{', '.join(mod.SUPPORTED_STAGES)})", "heaviside, or engine: yade", shown="{...}")
+           for name in config["protocols"] if name not in mod.SUPPORTED_STAGES]
+    if ((config.get("accuracy") or {}).get("bulk_vs_walls") or {}).get("run", False):
+        out.append(problem("accuracy.bulk_vs_walls.run", True, "the bulk-vs-walls study's periodic cells and trains "
+                           "run in yade only", "false, or engine: yade"))
+    label, case = next(iter(cases(config).items()))
+    for why in mod.refusals(scene_module(root).validate(scene_from_config(config, case, label))):
+        out.append(f"config error: engine = 'lammps' cannot run {why}")
+    return out
+
+
 def _schedule_hint(line: str, config: dict) -> str:
     """A schema line about a protocol that is neither heaviside, sinusoidal nor a schedule: say what it could be."""
     protocols = config.get("protocols") if isinstance(config.get("protocols"), dict) else {}
@@ -419,7 +439,7 @@ def check(config: dict, configfiles=(), schema_path=SCHEMA, root=ROOT) -> list[s
         out += step(config)
     if not out:
         out += sample_count_problems(config, root)  # (needs intervals in order and valid options)
-    return out or scene_problems(config, root)
+    return out or scene_problems(config, root) or engine_problems(config, root)
 
 
 def stop_on_problems(problems: list[str]) -> None:

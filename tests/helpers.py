@@ -34,6 +34,8 @@ from model import default_params, params_from_dict, save_params
 ROOT = Path(__file__).resolve().parents[1]
 YS = ROOT / "yade_scripts"
 RUN = YS / "run_stage.py"
+LS = ROOT / "lammps_scripts"
+LAMMPS_RUN = LS / "run_stage.py"
 SNAKEMAKE = [sys.executable, "-m", "snakemake"]
 
 # What a working copy leaves out: the repository's own results and Snakemake state, and the tests.
@@ -46,7 +48,7 @@ def command(script, *args):
     """The command line of a script: the stage runner and the tools/ scripts as the workflow runs
     them (python3, YADE imported as a library, no remote servers), any other script (an
     inspection written by a test) under the yade launcher."""
-    if Path(script).name in ("run_stage.py", "contact_census.py") or Path(script).parent.name == "tools":
+    if Path(script).name in ("run_stage.py", "contact_census.py") or Path(script).parent.name in ("tools", "lammps_scripts"):
         return ["python3", str(script), *map(str, args)]
     return ["yade", "-n", "-x", str(script), *map(str, args)]
 

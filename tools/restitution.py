@@ -3,7 +3,8 @@
 python3 tools/restitution.py <scene.json> [<out.json>]
 
 Prints (and writes) JSON: {"dt_over_tc": ..., "pairs": [{"D1": .., "D2": .., "e": ..}, ...]}
-with diameters in d. The disks are built exactly as in the cell (build.py).
+with diameters in d, for every pair of placement.pair_sizes (5 sizes over the polydispersity's
+range and d). The disks are built exactly as in the cell (build.py).
 """
 import json
 import os
@@ -16,6 +17,7 @@ import yadelib  # noqa: E402
 yadelib.run_under_yade_interpreter()  # YADE as a library: no remote servers (docs/scene.md)
 yadelib.import_yade()
 
+import placement  # noqa: E402
 import scene as scenemod  # noqa: E402
 
 scene, _ = scenemod.load(sys.argv[1])
@@ -55,8 +57,7 @@ def collide(D1, D2, v=0.1):
     return vout / vin
 
 
-sm, sM = scene["material"]["size_ratio_min"], scene["material"]["size_ratio_max"]
-pairs = [(1.0, 1.0), (sm, sm), (sM, sM), (sm, sM)]
+pairs = placement.pair_sizes(scene)
 out = dict(dt_over_tc=scene["timestep"]["dt_over_tc"], restitution=scene["material"]["restitution"],
            pairs=[dict(D1=a, D2=b, e=collide(a, b)) for a, b in pairs])
 print("RESTITUTION " + json.dumps(out), flush=True)

@@ -353,6 +353,7 @@ def profile(argv):
     scene_path, case, out = argv
     _import_yade()
     import run_stage
+    import stagecli
     import stages
     from yade.wrapper import Omega
 
@@ -375,7 +376,7 @@ def profile(argv):
                        ("reload", "reloads (every RELOAD_EVERY steps)"), ("checkpoint", "checkpoints"),
                        ("finish", "finish (final state, CSV, sidecar)"), ("progress", "progress lines")]:
         setattr(S, name, parts.timed(part, getattr(S, name)))
-    run_stage._Renew.touch = parts.timed("lock and log touch", run_stage._Renew.touch)
+    stagecli.Renew.touch = parts.timed("lock and log touch", stagecli.Renew.touch)
     w0, c0 = time.perf_counter(), time.process_time()
     rc = run_stage.main([scene_path, "preshear", case])
     parts.add("run_stage.main: all", time.perf_counter() - w0, time.process_time() - c0)

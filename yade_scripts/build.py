@@ -11,17 +11,15 @@ Layout (stored in O.tags['ys_layout'] so that every later stage finds it):
 """
 import json
 import math
-import random
+
+import placement
+from placement import PlacementError, loose_placement, seeded_diameters  # noqa: F401  (build.PlacementError; the periodic cell)
 
 from yade import utils
 from yade.minieigenHP import Matrix3, Vector3
 from yade.wrapper import FrictViscoMat, Omega, ViscElMat
 
 O = Omega()
-
-
-class PlacementError(RuntimeError):
-    pass
 
 
 def contact_material(scene, der, radius):
@@ -69,56 +67,6 @@ def set_disk(body, radius, rho, depth):
     body.state.inertia = Vector3(1, 1, 1) * (0.5 * mass * radius**2)
 
 
-def loose_placement(rnd, diameters, W, y_lo, y_hi, periodic_y=False):
-    """Random sequential placement of non-overlapping disks, periodic in x (and in y if ``periodic_y``).
-
-    Centres in [0, W) x [y_lo + r, y_hi - r] between walls, or in [0, W) x [y_lo, y_hi)
-    in a box periodic in y too. Returns a list of (x, y).
-    """
-    cell = max(diameters)
-    nx = max(1, int(W // cell))
-    cw = W / nx
-    Hc = y_hi - y_lo
-    ny = max(1, int(Hc // cell)) if periodic_y else None
-    ch = Hc / ny if periodic_y else cell
-    grid = {}
-    pos = [None] * len(diameters)
-    # largest first: random sequential placement then reaches denser loose states
-    for i in sorted(range(len(diameters)), key=lambda k: -diameters[k]):
-        D = diameters[i]
-        r = D / 2
-        for _ in range(20000):
-            x = rnd.uniform(0, W)
-            y = rnd.uniform(y_lo, y_hi) if periodic_y else rnd.uniform(y_lo + r, y_hi - r)
-            ix, iy = int(x // cw) % nx, int((y - y_lo) // ch)
-            if periodic_y:
-                iy %= ny
-            ok = True
-            for jx in (ix - 1, ix, ix + 1):
-                for jy in (iy - 1, iy, iy + 1):
-                    for j in grid.get((jx % nx, jy % ny if periodic_y else jy), ()):  # noqa: B007
-                        xj, yj = pos[j]
-                        dx = x - xj
-                        dx -= W * round(dx / W)
-                        dy = y - yj
-                        if periodic_y:
-                            dy -= Hc * round(dy / Hc)
-                        if dx * dx + dy ** 2 < (r + diameters[j] / 2) ** 2:
-                            ok = False
-                            break
-                    if not ok:
-                        break
-                if not ok:
-                    break
-            if ok:
-                grid.setdefault((ix, iy), []).append(i)
-                pos[i] = (x, y)
-                break
-        else:
-            raise PlacementError("loose placement failed: lower pack.initial_solid_fraction")
-    return pos
-
-
 def add_disks(scene, der, positions, diameters):
     """Add the disks (held in the plane, masses and inertias of disks) to O.bodies; return their ids."""
     grains, rho, d = [], der["rho"], der["d"]
@@ -130,43 +78,28 @@ def add_disks(scene, der, positions, diameters):
     return grains
 
 
-def seeded_diameters(scene, der):
-    """The scene's random stream (seeded by ``seed``) and the N disk diameters drawn first from it,
-    uniform in [size_ratio_min, size_ratio_max] d; the stream goes on to place them."""
-    m = scene["material"]
-    rnd = random.Random(scene["seed"])
-    return rnd, [der["d"] * rnd.uniform(m["size_ratio_min"], m["size_ratio_max"]) for _ in range(der["N"])]
-
-
 def new_cell(scene, der):
     """Create the loose cell of the pack stage. Returns the layout dict."""
     if scene["cell"]["kind"] == "periodic":
         return new_periodic_cell(scene, der)
     O.reset()
-    d, rho, W, H = der["d"], der["rho"], der["W"], der["H"]
-    m, pk = scene["material"], scene["pack"]
-    rnd, diam = seeded_diameters(scene, der)
-    N = len(diam)
-    # initial gap: the loose placement at initial_solid_fraction
-    H0 = d + (H - d) * pk["solid_fraction_guess"] / pk["initial_solid_fraction"]
-    y_bottom = 2 * d
-    y_top = y_bottom + H0
+    d, rho, W = der["d"], der["rho"], der["W"]
+    cell = placement.wall_cell(scene, der)
+    N, y_bottom, y_top = len(cell["diameters"]), cell["y_bottom"], cell["y_top"]
     O.periodic = True
-    O.cell.setBox(W, y_top + 4 * d + 2 * H0, 4 * d * m["size_ratio_max"])
-    pos = loose_placement(rnd, diam, W, y_bottom + d / 2, y_top - d / 2)
-    grains = add_disks(scene, der, pos, diam)
+    O.cell.setBox(W, y_top + 4 * d + 2 * cell["H0"], 4 * d * scene["material"]["size_ratio_max"])
+    grains = add_disks(scene, der, cell["positions"], cell["diameters"])
     n_w = der["n_wall"]
-    s = W / n_w
     wall_mat = contact_material(scene, der, d / 2)
     bottom = []
-    for i in range(n_w):
-        b = utils.sphere(Vector3((i + 0.5) * s, y_bottom, 0), d / 2, material=wall_mat, fixed=True)
+    for x, y in cell["bottom"]:
+        b = utils.sphere(Vector3(x, y, 0), d / 2, material=wall_mat, fixed=True)
         set_disk(b, d / 2, rho, d)
         b.state.blockedDOFs = "xyzXYZ"
         bottom.append(O.bodies.append(b))
     top_members = []
-    for i in range(n_w):
-        b = utils.sphere(Vector3(i * s, y_top, 0), d / 2, material=wall_mat)
+    for x, y in cell["top"]:
+        b = utils.sphere(Vector3(x, y, 0), d / 2, material=wall_mat)
         set_disk(b, d / 2, rho, d)
         top_members.append(b)
     clump_id, top = O.bodies.appendClumped(top_members)

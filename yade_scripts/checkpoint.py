@@ -24,6 +24,7 @@ import time
 
 import build
 import measure
+from atomicfile import atomic_json
 from yade.wrapper import Omega
 
 O = Omega()
@@ -45,15 +46,6 @@ def save_state(path):
     O.save(tmp)
     if not os.path.isfile(tmp):
         raise RuntimeError(f"O.save did not write {tmp}")
-    os.replace(tmp, path)
-
-
-def atomic_json(path, obj):
-    tmp = path + ".tmp"
-    with open(tmp, "w") as f:
-        json.dump(obj, f, indent=1, sort_keys=True)
-        f.flush()
-        os.fsync(f.fileno())
     os.replace(tmp, path)
 
 

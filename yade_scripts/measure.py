@@ -12,11 +12,11 @@ import yade._utils as yu
 from yade.minieigenHP import Vector3
 from yade.wrapper import Omega
 
+from rows import COLUMNS, overlap_stats  # noqa: F401  (measure.COLUMNS, measure.overlap_stats)
+
 O = Omega()
 EX, EY = Vector3(1, 0, 0), Vector3(0, 1, 0)
 BIG = 1e30
-COLUMNS = ["t", "strain", "gammadot", "U_top", "U_bottom", "gap", "A_xx", "A_xy", "n_contacts",
-           "sigma_xy", "p", "mu", "sigma_xy_bulk", "p_bulk", "phi", "Z", "inertial_number"]
 
 
 def walls(lay):
@@ -86,22 +86,6 @@ def max_overlap_d(d, smax):
     """
     ratio = float(yu.maxOverlapRatio())
     return ratio * smax / 2
-
-
-def overlap_stats(overlaps_d):
-    """Mean, median, 90th percentile, max and count of a list of overlaps (in d).
-
-    The paper states its stiffness as a mean overlap delta/d; kappa = kn/(p d) sets it
-    (docs/findings.md, "The stiffness axis in the campaign's cell": delta/d = 1.4-1.7/kappa).
-    """
-    ov = sorted(overlaps_d)
-    if not ov:
-        return dict(n=0, mean=math.nan, median=math.nan, p90=math.nan, max=math.nan)
-
-    def q(f):
-        return ov[min(len(ov) - 1, int(f * len(ov)))]
-
-    return dict(n=len(ov), mean=sum(ov) / len(ov), median=q(0.5), p90=q(0.9), max=ov[-1])
 
 
 def grain_overlaps_d(n_grains, d):

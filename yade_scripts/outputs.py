@@ -61,7 +61,7 @@ class Outputs:
         n_p = max(1, st["n_acc"])
         p_mean = st["sum_p"] / n_p if st["n_acc"] else math.nan
         out = dict(
-            stage=self.stage, scene=sc, scene_sha256=self.hash, seed=sc["seed"], N=self.lay["N"],
+            stage=self.stage, engine="yade", scene=sc, scene_sha256=self.hash, seed=sc["seed"], N=self.lay["N"],
             N_wall=self.lay["n_wall"], dt=st["dt"], dt_over_tc=st["dt"] / der["tc"], kn=der["kn"], kt=der["kt"],
             kappa=sc["material"]["kappa"], inertial_number=sc["loading"]["inertial_number"],
             U=der["U"], gammadot_nominal=der["gammadot"], time_unit_s=T0,

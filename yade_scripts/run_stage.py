@@ -19,80 +19,20 @@ import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(sys.argv[0])))
 
+import stagecli  # noqa: E402
 import yadelib  # noqa: E402
-
-USAGE = ("usage: python3 yade_scripts/run_stage.py <scene.json> "
-         "<pack|preshear|heaviside|sinusoidal|<schedule name>> <case_dir> [--log <file>]")
-
-
-def parse(argv):
-    """(scene path, stage, case_dir, log path or None), or None if the command line is wrong."""
-    argv, log = list(argv), None
-    if "--log" in argv:
-        k = argv.index("--log")
-        if k + 1 >= len(argv):
-            return None
-        log = argv[k + 1]
-        del argv[k:k + 2]
-    if len(argv) != 3:
-        return None
-    return (*argv, log)
 
 
 def main(argv):
     if yadelib.under_the_launcher():
         print("run_stage.py is not run by the yade launcher (it opens a TCP Python prompt and an "
-              "XMLRPC server for the life of the stage): " + USAGE.removeprefix("usage: "), file=sys.stderr)
+              "XMLRPC server for the life of the stage): " + stagecli.usage("yade").removeprefix("usage: "),
+              file=sys.stderr)
         return 2
-    import scene as scenemod
-    import stagelock
-
-    args = parse(argv)
-    if args is None or not (args[1] in scenemod.STAGES or scenemod.PROTOCOL_NAME.match(args[1])):
-        print(USAGE, file=sys.stderr)
-        return 2
-    path, stage, case_dir, log_path = args
-    try:
-        scene, sha = scenemod.load(path, stage)
-    except scenemod.SceneError as e:
-        print(e, file=sys.stderr)
-        return 2
-
-    said = []  # the lock's lines (a stale lock taken over) go to the log, once it is open
-    lock = stagelock.StageLock(case_dir, stage, log=said.append)
-    try:
-        lock.acquire()
-    except stagelock.Busy as e:
-        print(f"busy: {e}", file=sys.stderr)
-        return 5
-    import stagelog
-
-    log = stagelog.StageLog(log_path, case_dir, stage) if log_path else None
-    try:
-        if log is not None:
-            log.open()
-        for line in said:
-            print(line, flush=True)
-        return run(scene, sha, stage, case_dir, lock, log)
-    finally:
-        if log is not None:
-            log.close()
-        lock.release()
+    return stagecli.main(argv, "yade", run)
 
 
-class _Renew:
-    """Called by the run loop after every chunk: renew the lock, keep the log in place."""
-
-    def __init__(self, lock, log):
-        self.lock, self.log = lock, log
-
-    def touch(self):
-        self.lock.touch()
-        if self.log is not None:
-            self.log.keep()
-
-
-def run(scene, sha, stage, case_dir, lock, log):
+def run(scene, sha, stage, case_dir, renew):
     try:
         yadelib.import_yade()
     except (yadelib.YadeNotFound, ImportError) as e:
@@ -101,20 +41,13 @@ def run(scene, sha, stage, case_dir, lock, log):
     import stages  # YADE imports only once the scene is known to be good and the stage is ours
 
     stages.install_signal_handlers()
-    try:
+
+    def work():
         st = stages.Stage(scene, sha, stage, case_dir)
         st.prepare()
-        st.run(_Renew(lock, log))
-    except stages.InputError as e:
-        print(f"input error: {e}", file=sys.stderr)
-        return 2
-    except stages.GuardError as e:
-        print(f"guard: {e}", file=sys.stderr)
-        return 3
-    except stages.Interrupted as e:
-        print(f"interrupted: {e}", file=sys.stderr)
-        return 4
-    return 0
+        st.run(renew)
+
+    return stagecli.exit_code(work)
 
 
 if __name__ == "__main__":  # also under the launcher (`yade -x` runs a script as __main__)

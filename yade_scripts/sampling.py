@@ -13,34 +13,15 @@ from yade.wrapper import Omega
 
 import engines
 import measure
+from rows import PACK_COLUMNS, fmt, pressure_window_problem, wall_row
 from stageerrors import GuardError
 
 O = Omega()
 
 
-def _fmt(x):
-    if isinstance(x, float):
-        return repr(x) if math.isfinite(x) else "nan"
-    return str(x)
-
-
-def pressure_guard_tolerance(guards, W_over_d):
-    """The largest deviation of the window-mean wall pressure from p that the guard lets pass.
-
-    tol = max(guards.pressure_tolerance, guards.pressure_noise_z * sqrt(d / W)): the relative
-    fluctuation of the wall pressure falls as one over the square root of the number of wall
-    contacts, about W/d. Measured on the released narrow cell (W = 18.5d, kappa 1e5, I 1e-3),
-    the largest 0.1-strain window mean of a run departs from p by up to about 1.0 sqrt(d/W)
-    (0.23 p; 0.6 sqrt(d/W) in the W = 96d cell); a blow-up or a failed pressure control departs
-    by multiples of p. With the default z = 2.5 the narrow cell's guard is at 0.58 p, a cell
-    wider than about 150 d keeps the configured 0.2.
-    """
-    return max(guards["pressure_tolerance"], guards["pressure_noise_z"] / W_over_d ** 0.5)
-
-
 class Sampling:
     def columns(self):
-        return measure.COLUMNS + (["ke", "wall_speed", "load"] if self.stage == "pack" else [])
+        return measure.COLUMNS + (PACK_COLUMNS if self.stage == "pack" else [])
 
     def _install_engines(self):
         st = self.st
@@ -77,21 +58,9 @@ class Sampling:
         self.st["sampler_cpu"] = self.st.get("sampler_cpu", 0.0) + time.thread_time() - c0
 
     def _row(self, w):
-        der, st = self.der, self.st
-        d, p, T0, V0, W = der["d"], der["p"], der["T0"], der["V0"], der["W"]
-        gap = w["y_top"] - w["y_bot"]
-        x_rel = w["x_top"] - w["x_bot"]
-        st["strain"] += (x_rel - st["x_rel"]) / (0.5 * (gap + st["gap"]))
-        st["x_rel"], st["gap"] = x_rel, gap
-        gd = (w["u_top"] - w["u_bot"]) / gap
-        sxy = (w["fx_bot"] - w["fx_top"]) / (2 * W * d) / p
-        pw = (w["fy_top"] - w["fy_bot"]) / (2 * W * d) / p
-        row = dict(t=(self._t - st["t_origin"]) / T0, strain=st["strain"], gammadot=gd * T0,
-                   U_top=w["u_top"] / V0, U_bottom=w["u_bot"] / V0, gap=gap / d, sigma_xy=sxy, p=pw,
-                   mu=abs(sxy) / pw if pw > 0 else math.nan,
-                   inertial_number=abs(gd) * T0 / math.sqrt(pw) if pw > 0 else math.nan)
-        for k in ("A_xx", "A_xy", "n_contacts", "sigma_xy_bulk", "p_bulk", "phi", "Z"):
-            row[k] = math.nan
+        der = self.der
+        d, p, W = der["d"], der["p"], der["W"]
+        row, pw, gd = wall_row(der, self.st, w, self._t - self.st["t_origin"])
         ys = None
         if self.scene["effects"]["measurements"]:
             excl = self.scene["sampling"]["bulk_exclusion_d"] * d
@@ -119,8 +88,8 @@ class Sampling:
             row_load = st["load"] / (der["p"] * der["W"] * der["d"])
             extra = [ke_mean, wall_speed, row_load]
         self._guards(row, ys, w)
-        self.csv.write(",".join(_fmt(row[c]) for c in measure.COLUMNS)
-                       + "".join("," + _fmt(x) for x in extra) + "\n")
+        self.csv.write(",".join(fmt(row[c]) for c in measure.COLUMNS)
+                       + "".join("," + fmt(x) for x in extra) + "\n")
         st["rows"] += 1
         st["last_sample_iter"] = self._it
         if self.stage == "pack":
@@ -158,20 +127,9 @@ class Sampling:
                 raise GuardError(f"overlap {ov:.4f} d above guards.max_overlap_d = {g['max_overlap_d']:g} "
                                  f"at iteration {self._it} (t = {row['t']:.4f})")
         if self.stage != "pack":
-            elapsed = (self._it - st["iter0"]) * der["dt"] * der["gammadot"]
-            win = st["window"]
-            win.append([elapsed, row["p"]])
-            span = g["pressure_window_strain"]
-            while win and win[0][0] < elapsed - span:
-                win.pop(0)
-            if elapsed - st.get("guard_from", 0.0) >= span and len(win) >= 3:
-                pm = sum(x[1] for x in win) / len(win)
-                tol = pressure_guard_tolerance(g, der["W"] / d)
-                if abs(pm - 1) > tol:
-                    raise GuardError(f"wall pressure {pm:.4f} p on average over the last {span:g} strain, "
-                                     f"off by more than {tol:.3g} = max(guards.pressure_tolerance "
-                                     f"{g['pressure_tolerance']:g}, guards.pressure_noise_z "
-                                     f"{g['pressure_noise_z']:g} x sqrt(d/W))")
+            why = pressure_window_problem(st, g, der, self._it - st["iter0"], row["p"])
+            if why is not None:
+                raise GuardError(why)
 
     def progress(self, now):
         st = self.st

@@ -12,6 +12,9 @@ import re
 INF = float("inf")
 REQUIRED = object()
 STAGES = ("pack", "preshear", "heaviside", "sinusoidal")
+# The DEM engine that runs the scene: yade_scripts/ (the default and the reference) or lammps_scripts/.
+ENGINES = ("yade", "lammps")
+ENGINE = "engine"
 
 
 class SceneError(ValueError):
@@ -185,7 +188,7 @@ def validate(raw, stage=None):
     """
     if not isinstance(raw, dict):
         raise SceneError("scene error: the scene must be a JSON object")
-    known = set(SPEC) | {"seed", "meta", SCHEDULES}
+    known = set(SPEC) | {"seed", "meta", SCHEDULES, ENGINE}
     for k in raw:
         if k not in known:
             raise SceneError(f"scene error: unknown key '{k}' (allowed: {', '.join(sorted(known))})")
@@ -212,6 +215,8 @@ def validate(raw, stage=None):
         if not isinstance(src, dict):
             raise SceneError(f"scene error: section '{sec}' must be a JSON object")
         out[sec] = _check_keys(sec, src, keys)
+    if ENGINE in raw:  # (absent: YADE, and the validated scene stays as it was before engines existed)
+        out[ENGINE] = _check_value(ENGINE, dict(kind="choice", choices=ENGINES), raw[ENGINE])
     if SCHEDULES in raw:  # (absent: the validated scene stays as it was before schedules existed)
         out[SCHEDULES] = check_schedules(raw[SCHEDULES])
     if stage is not None and stage not in STAGES and stage not in out.get(SCHEDULES, {}):
@@ -364,6 +369,11 @@ def _check_contact_law(out):
             "scene error: material.contact_law = 'viscel' cannot be used with cell.kind = periodic: YADE's "
             "Law2_ScGeom_ViscElPhys_Basic adds the periodic image's velocity with the wrong sign, so every "
             "contact across the sheared boundary slides (use frictvisco)")
+
+
+def engine(scene):
+    """The engine that runs the scene: its `engine` key, yade when absent."""
+    return scene.get(ENGINE, ENGINES[0])
 
 
 def load(path, stage=None):

@@ -1,4 +1,4 @@
-# DEM stages under YADE: scene -> pack -> preshear -> heaviside | sinusoidal | <schedule>.
+# DEM stages under YADE (or LAMMPS, config engine): scene -> pack -> preshear -> heaviside | sinusoidal | <schedule>.
 # One pre-shear per case feeds every reversal protocol. YADE runs on one thread,
 # so `-j2` runs two cases side by side. The chain is written once (DEM_CHAINS
 # below) and instantiated for every results folder that holds DEM cases: the
@@ -20,6 +20,17 @@ YADE_STAGE = (
     "OMP_NUM_THREADS=1 YADE_LAUNCHER={YADE:q} python3 yade_scripts/run_stage.py"
     " {input.scene:q} {params.stage:q} {params.case_dir:q} --log {log:q}"
 )
+# One LAMMPS stage (config engine: lammps): the same scene, lock, log and exit codes; LAMMPS is
+# loaded as a library by the interpreter Debian's python3-lammps is installed for (lammpslib).
+LAMMPS_STAGE = (
+    "OMP_NUM_THREADS=1 python3 lammps_scripts/run_stage.py"
+    " {input.scene:q} {params.stage:q} {params.case_dir:q} --log {log:q}"
+)
+ENGINE = config.get("engine", "yade")
+DEM_STAGE = {"yade": YADE_STAGE, "lammps": LAMMPS_STAGE}[ENGINE]
+# A stage's final state, the next stage's input: YADE's O.save, or a LAMMPS restart file
+# (lammps_scripts/shearing.py STATE_SUFFIX).
+STATE_SUFFIX = {"yade": ".final.yade.gz", "lammps": ".final.lammps"}[ENGINE]
 
 
 def case_scene(label):
@@ -98,9 +109,9 @@ for dem_chain in DEM_CHAINS:
                 dem_rule_name
             input:
                 scene=f"{RESULTS}/{dem_where}/scene.json",
-                **({"state": f"{RESULTS}/{dem_where}/{dem_previous}.final.yade.gz"} if dem_previous else {}),
+                **({"state": f"{RESULTS}/{dem_where}/{dem_previous}{STATE_SUFFIX}"} if dem_previous else {}),
             output:
-                state=f"{RESULTS}/{dem_where}/{dem_stem}.final.yade.gz",
+                state=f"{RESULTS}/{dem_where}/{dem_stem}{STATE_SUFFIX}",
                 series=f"{RESULTS}/{dem_where}/{dem_stem}.csv",
                 sidecar=f"{RESULTS}/{dem_where}/{dem_stem}.json",
             params:
@@ -116,7 +127,7 @@ for dem_chain in DEM_CHAINS:
                 f"{RESULTS}/benchmarks/{dem_where}/{dem_stem}.tsv"
             threads: 1
             shell:
-                YADE_STAGE
+                DEM_STAGE
 
 
 rule dem_summary:

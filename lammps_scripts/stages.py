@@ -1,0 +1,117 @@
+"""The LAMMPS stages and their controller: pack, preshear, heaviside of the wall cell.
+
+One controller per process, the class Stage, split by concern into one mixin per module as in
+yade_scripts/: packing (the pack's phases), shearing (the previous state, the walls' speeds),
+sampling (rows, guards, progress), outputs (final files, sidecar); this module holds the start
+and the run loop. LAMMPS runs between samples (`run n`, `pre no` unless a fix, the pair style
+or the load changed since the last run, whose setup LAMMPS then needs); Python samples between
+runs: one CSV row, the guards, progress.
+
+Not yet (docs/scene.md, "The LAMMPS engine"): checkpoints and resume (a stage killed is run
+again from its start), the sinusoidal reversal and reversal schedules, the periodic cell.
+"""
+import os
+import shutil
+import time
+
+import cell
+import lammpslib
+import measure
+import scene as scenemod
+from outputs import Outputs
+from packing import Packing
+from rows import COLUMNS, PACK_COLUMNS
+from sampling import Sampling
+from shearing import Shearing
+from stageerrors import GuardError, InputError  # noqa: F401  (run_stage's exit codes)
+
+STAGES = ("pack", "preshear", "heaviside")  # what lammps_scripts runs (pre-flight: preflight/checks.py)
+
+
+class Stage(Packing, Shearing, Sampling, Outputs):
+    def __init__(self, scene, scene_hash, stage, case_dir):
+        self.scene, self.hash, self.stage, self.case_dir = scene, scene_hash, stage, case_dir
+        self.der = scenemod.derived(scene)
+        self.partial = os.path.join(case_dir, ".partial", stage)
+        self.csv_path = os.path.join(self.partial, f"{stage}.csv")
+        self.done = False
+        self.setup_needed = True
+        self.drag = None
+        self.lmp = None
+
+    def columns(self):
+        return COLUMNS + (PACK_COLUMNS if self.stage == "pack" else [])
+
+    def step(self):
+        return int(self.lmp.extract_global("ntimestep"))
+
+    def time(self):
+        """Simulated time since the packing's start, s (the step count times the frozen dt)."""
+        return self.step() * self.st["dt"]
+
+    def prepare(self):
+        """A fresh start: the partial folder, LAMMPS (logging into it), the cell or the previous state,
+        the contact law, the computes and the fixes."""
+        os.makedirs(self.case_dir, exist_ok=True)
+        shutil.rmtree(self.partial, ignore_errors=True)  # this process owns the stage (stagelock)
+        os.makedirs(self.partial)
+        self.lmp = lammpslib.open_lammps(("-log", os.path.join(self.partial, "log.lammps"), "-screen", "none",
+                                          "-nocite"))
+        self.lammps_version = self.lmp.version()
+        measure.check_image_flags(self.lmp)
+        der = self.der
+        st = dict(stage=self.stage, rows=0, sum_p=0.0, sum_gd=0.0, sum_gap=0.0, n_acc=0, window=[], pack_ok=0,
+                  resumed=0, scene_sha256=self.hash)
+        self.st = st
+        steps_per_strain = 1.0 / (der["gammadot"] * der["dt"])
+        smp = self.scene["sampling"]
+        st["fine_every"] = max(1, int(round(smp["fine_interval"] * steps_per_strain)))
+        st["coarse_every"] = max(st["fine_every"], int(round(smp["coarse_interval"] * steps_per_strain)))
+        if self.stage == "pack":
+            self.start_pack(st)
+        else:
+            self.start_from_previous(st, steps_per_strain)
+        self.pair_style = cell.interactions(self.lmp, self.scene, der, st["friction"])
+        measure.computes(self.lmp)
+        self.fix_lines = cell.fixes(self.lmp, self.lay["n_wall"], st["load"])
+        self.apply_wall_speeds()
+        if self.stage == "pack":
+            self.apply_damping()
+        self.run_steps(0)  # forces of the start (the walls' contact forces for the first strain step)
+        w = measure.walls(measure.Snapshot(self.lmp, self.lay, der["W"]))
+        st["x_rel"], st["gap"] = w["x_top"] - w["x_bot"], w["y_top"] - w["y_bot"]
+        st["last_sample_iter"] = st["iter0"]
+        self.csv = open(self.csv_path, "w")
+        self.csv.write(",".join(self.columns()) + "\n")
+        self.t_wall0, self.cpu0 = time.time(), time.process_time()
+        self.iter_wall0 = self.step()
+        self.last_progress = self.t_wall0
+
+    def run_steps(self, n):
+        """`run n`, with LAMMPS's setup only when something changed since the last run."""
+        pre = "yes" if self.setup_needed else "no"
+        self.lmp.command(f"run {n} pre {pre} post no")
+        self.setup_needed = False
+
+    def run(self, lock=None):
+        """Step to the end, one sample at a time; `lock.touch()` after every sample (run_stage)."""
+        st = self.st
+        while not self.done:
+            done = self.step() - st["iter0"]
+            if done >= st["n_steps"]:
+                break
+            n = min(st["n_steps"] - done, st["last_sample_iter"] + st["every"] - self.step())
+            self.run_steps(max(1, n))
+            self.sample()
+            if lock is not None:
+                lock.touch()
+        if self.stage == "pack" and not self.done:
+            raise GuardError(f"packing not converged within pack.max_time = {self.scene['pack']['max_time']:g} "
+                             f"(phase {st['phase']}; see pack.csv columns ke, wall_speed, p)")
+        self.sample()  # the final state is always sampled (no-op if just sampled)
+        self.finish()
+
+    def close(self):
+        if self.lmp is not None:
+            lammpslib.close_lammps(self.lmp)
+            self.lmp = None
