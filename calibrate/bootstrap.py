@@ -132,6 +132,10 @@ def _refit(k, smp, r1, drawn, replays, full, base_doc, steady, settings, s2, edg
     return doc1, doc2, rows
 
 
+#: The first columns of ``heldout_scores.csv`` (the scores follow; the header alone when no replicate held a seed out).
+HELDOUT_COLUMNS = ["replicate", "route", "model", "n_heldout_runs"]
+
+
 def _heldout_scores(k, doc1, doc2, held_reps, sigma_mu, settings_route2) -> list:
     """Scores of one replicate's routes on its held-out runs (none if every seed was drawn)."""
     out = []
@@ -143,7 +147,7 @@ def _heldout_scores(k, doc1, doc2, held_reps, sigma_mu, settings_route2) -> list
     scores = route2.score_many([(prms[route], model) for route, _, model in keys], held_reps, settings_route2,
                                sigma_mu)   # the four (route, model) pairs in one batch
     for (route, _, model), sc in zip(keys, scores):
-        out.append({"replicate": k, "route": route, "model": model, "n_heldout_runs": len(held_reps), **sc})
+        out.append({**dict(zip(HELDOUT_COLUMNS, (k, route, model, len(held_reps)))), **sc})
     return out
 
 

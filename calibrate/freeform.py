@@ -386,6 +386,13 @@ def note_table(note: str) -> pd.DataFrame:
                               n=math.nan, detail=note)])
 
 
+def not_requested_table() -> pd.DataFrame:
+    """``freeform.csv`` when the fit was not asked for (no ``--freeform``; the workflow's
+    ``calibration.freeform`` false): one row, ``section`` = note, so the file exists either way."""
+    return pd.DataFrame([dict(section="note", key="not requested", value=math.nan, low=math.nan, high=math.nan,
+                              n=math.nan, detail="calibration.freeform is false")])
+
+
 def table(res: dict, settings: FreeformSettings) -> pd.DataFrame:
     """``freeform.csv``: breaks, coefficients, CV scores, paired held-out scores and the pole bends.
 

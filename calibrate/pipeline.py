@@ -178,9 +178,11 @@ def fit_freeform(replays, doc2, steady, r1, out: Path, settings: Settings, log):
     """Step 5b (only with ``settings.freeform``): free-form alphas against Models 1 and 2, ``freeform.csv``.
 
     Returns the curves for Figs. 3a, 3b (``freeform.curves_for_figure``) and the ``fit_quality.csv`` row of
-    the free-form set's shear stability (``shear_stability.check``), or (None, None) when the step is off.
+    the free-form set's shear stability (``shear_stability.check``), or (None, None) when the step is off
+    (``freeform.csv`` then says so in one note row).
     """
     if settings.freeform is None:
+        tables.write_csv(freeform.not_requested_table(), out / "freeform.csv")
         return None, None
     seeds = sorted({r.case for r in replays})
     if len(seeds) < 2:
@@ -546,6 +548,8 @@ def write_tables(out: Path, final, ptab, btab, quality, heldout, values) -> None
     tables.write_csv(pd.DataFrame(quality), out / "fit_quality.csv")
     if len(heldout):  # a failed replicate: NaN scores, the reason in 'failure'
         tables.write_csv(heldout.replace([np.inf, -np.inf], np.nan), out / "heldout_scores.csv")
+    else:  # no replicate held a seed out (one seed): the header alone
+        tables.write_csv(pd.DataFrame(columns=bootstrap.HELDOUT_COLUMNS), out / "heldout_scores.csv")
     tables.write_csv(values, out / "bootstrap_values.csv")
 
 
