@@ -25,9 +25,12 @@ threshold has its lower end at 0: the data cannot tell the pole from the start.
 
 Command line::
 
-    python -m calibrate.pole_start --dem results/dem/<case> ... --params results/calibration/<set>/params.yaml \
+    python -m calibrate.pole_start_fit --dem results/dem/<case> ... --params results/calibration/<set>/params.yaml \
         --protocols heaviside sinusoidal --out results/calibration/<set>/pole_start.yaml
         # -> pole_start.yaml (fitted block, delta and its profile interval), pole_start_profile.csv
+
+The workflow gives the fit the budget of its set's calibration (``budget``): calibrate's own options
+(``calibration.options``), read by calibrate's parser, set ``--max-evals`` and ``--profile-points``.
 """
 from __future__ import annotations
 
@@ -355,8 +358,22 @@ def run(case_dirs, params_path, protocols, out_yaml, max_evals: int = Route2Sett
     return out
 
 
+def budget(calibrate_options: list[str]) -> tuple[int, int]:
+    """``--max-evals`` and ``--profile-points`` of this fit from ``python -m calibrate``'s options, read by its parser.
+
+    ``--route2-evals`` (calibrate's default when not given) and ``--profile-points`` (this fit's
+    ``PROFILE_POINTS`` when not given: the variant's one profile is cheaper than calibrate's).
+    """
+    from .__main__ import parser as calibrate_parser
+
+    ap = calibrate_parser()
+    ap.set_defaults(profile_points=PROFILE_POINTS)
+    a = ap.parse_args(["--dem", "-", "--out", "-", *calibrate_options])
+    return a.route2_evals, a.profile_points
+
+
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m calibrate.pole_start", description=__doc__.split("\n\n")[0])
+    ap = argparse.ArgumentParser(prog="python -m calibrate.pole_start_fit", description=__doc__.split("\n\n")[0])
     ap.add_argument("--dem", nargs="+", required=True, help="DEM case directories the set is calibrated on")
     ap.add_argument("--params", required=True, help="the set's params.yaml (its Eq. 2 and Model 1 start)")
     ap.add_argument("--protocols", nargs="+", default=["heaviside", "sinusoidal"])
@@ -367,7 +384,7 @@ def main(argv=None) -> int:
     try:
         run(args.dem, args.params, args.protocols, args.out, args.max_evals, args.profile_points)
     except ValueError as exc:
-        print(f"calibrate.pole_start: error: {exc}", file=sys.stderr)
+        print(f"calibrate.pole_start_fit: error: {exc}", file=sys.stderr)
         return 2
     return 0
 
