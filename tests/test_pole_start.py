@@ -11,7 +11,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from calibrate import pipeline, route2, synthetic
+from calibrate import dem_replays, pipeline, synthetic
 from calibrate import pole_start_fit as cps
 from compare import pole_start_predict as mps
 from compare.dem import load_reversals
@@ -68,7 +68,7 @@ def test_model_curves_at_zero_offset_are_finite_or_a_named_failure(truth_fit):
     settings = pipeline.Settings(protocols=("heaviside", "sinusoidal"))
     cases = pipeline.read_inputs(dirs, settings)
     samples, _ = pipeline.smooth(cases, settings)
-    replays = route2.prepare(cases, samples, settings.backsolve)
+    replays = dem_replays.prepare(cases, samples, settings.backsolve)
     doc = load_params(truth_fit[0] / "start.yaml").to_dict()
     doc.pop("provenance", None)
     doc.pop("intervals", None)
