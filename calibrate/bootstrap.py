@@ -4,7 +4,7 @@ A replicate draws, within each ensemble (group), as many seeds as it has, with
 replacement; both routes are refitted on the drawn seeds (route 1 from scratch,
 route 2 warm-started from its full-data fit under a smaller budget). The seeds
 *not* drawn are held out: each route's replicate parameters predict their runs
-(``route2.score``). Intervals are the 2.5 and 97.5 percentiles of the replicate
+(``curves_fit.score``). Intervals are the 2.5 and 97.5 percentiles of the replicate
 values; the held-out score of a route is the mean over replicates that held a
 seed out.
 """
@@ -17,7 +17,7 @@ import pandas as pd
 
 from model import params_from_dict
 
-from . import route1, route2
+from . import curves_fit, route1, route2
 
 BLOCKS = ("friction_eq2", "friction_quadratic", "model1", "model2")
 
@@ -60,7 +60,7 @@ def run(cases, samples, steady_fn, replays, full, base_doc, settings, n_boot=20,
     cases : list of io.Case
     samples : DataFrame (``smoothing.smooth_cases``)
     steady_fn : callable(list of case names) -> steady dict
-    replays : list of route2.Replay
+    replays : list of calibrate.dem_replays.Replay
     full : dict
         Full-data results: ``route1`` (dict of FitResult) and ``route2`` (dict model -> FitResult).
     base_doc : dict
@@ -126,10 +126,14 @@ def _refit(k, smp, r1, drawn, replays, full, base_doc, steady, settings, s2, edg
     reps = [r for name in drawn for r in replays if r.case == name]
     doc2 = dict(doc1)
     for model in ("model1", "model2"):
-        f = route2.fit(reps, doc1, model, full["route2"][model].values, steady, r1["sigma_mu"], s2)
+        f = curves_fit.fit(reps, doc1, model, full["route2"][model].values, steady, r1["sigma_mu"], s2)
         doc2[model] = f.values
         rows += [(k, "curves", model, name, v) for name, v in f.values.items()]
     return doc1, doc2, rows
+
+
+#: The first columns of ``heldout_scores.csv`` (the scores follow; the header alone when no replicate held a seed out).
+HELDOUT_COLUMNS = ["replicate", "route", "model", "n_heldout_runs"]
 
 
 def _heldout_scores(k, doc1, doc2, held_reps, sigma_mu, settings_route2) -> list:
@@ -140,10 +144,10 @@ def _heldout_scores(k, doc1, doc2, held_reps, sigma_mu, settings_route2) -> list
     keys = [(route, doc, model) for route, doc in (("backsolve", doc1), ("curves", doc2))
             for model in ("model1", "model2")]
     prms = {route: params_from_dict(doc, source=f"bootstrap {k} {route}") for route, doc, _ in keys}
-    scores = route2.score_many([(prms[route], model) for route, _, model in keys], held_reps, settings_route2,
+    scores = curves_fit.score_many([(prms[route], model) for route, _, model in keys], held_reps, settings_route2,
                                sigma_mu)   # the four (route, model) pairs in one batch
     for (route, _, model), sc in zip(keys, scores):
-        out.append({"replicate": k, "route": route, "model": model, "n_heldout_runs": len(held_reps), **sc})
+        out.append({**dict(zip(HELDOUT_COLUMNS, (k, route, model, len(held_reps)))), **sc})
     return out
 
 

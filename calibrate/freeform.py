@@ -7,7 +7,7 @@ cubic B-splines on breaks over the X the samples visit, from their 0.5th to
 their 99.5th percentile, continued linearly outside; how many breaks and how
 they crowd toward the largest X visited, where a pole would act, is chosen by
 cross-validation, ``breaks_for``) is fitted by trajectory fitting on the
-residuals of route 2 (``route2.curves``, ``route2.residual_vector`` and the
+residuals of route 2 (``route2.curves``, ``curves_fit.residual_vector`` and the
 steady residuals of ``fits``), plus a roughness penalty
 
 .. math::
@@ -70,7 +70,7 @@ from model import params_from_dict
 from model.laws import AlphaSpline, spline_basis, spline_of_linear, spline_size
 from shared_stats import early_rmse, mean_interval
 
-from . import fits, route2, shear_stability
+from . import curves_fit, fits, route2, shear_stability
 
 SCORES = ("early_A_norm", "early_A_mse", "A_norm", "theta_A", "mu")
 LAWS = ("freeform", "model1", "model2")
@@ -194,19 +194,19 @@ def fit_spline(replays, doc: dict, start: AlphaSpline, steady: dict, sigma_mu: f
             if isinstance(c, Exception):
                 out.append(None)
                 continue
-            r = np.concatenate([route2.fit_residuals(c, replays, sigma_mu, s2, sp(float(steady["X"])), steady),
+            r = np.concatenate([curves_fit.fit_residuals(c, replays, sigma_mu, s2, sp(float(steady["X"])), steady),
                                 _penalty_rows(sp, lam)])
             stable = shear_stability.check(sp)["stable"]     # a law that cannot shear steadily: excluded
             out.append(r if np.all(np.isfinite(r)) and stable else None)
         return out
 
-    res, workers, state = route2.counted_objective(evaluate, n_res, max_evals)
+    res, workers, state = curves_fit.counted_objective(evaluate, n_res, max_evals)
     x0 = np.concatenate([start.c1, start.c2])
     message = ""
     try:
         sol = least_squares(res, x0, x_scale="jac", diff_step=s2.diff_step, max_nfev=max_evals, workers=workers)
         message = sol.message
-    except route2.BudgetExhausted:
+    except curves_fit.BudgetExhausted:
         message = f"budget of {max_evals} model evaluations used up; best point kept"
     best = state["best"] if state["best"] is not None else x0
     return unpack(best), {"cost": state["best_cost"], "evaluations": state["n"],
@@ -249,7 +249,7 @@ def _heldout(items, held, s2, sigma_mu, early_strain) -> list:
         if isinstance(c, Exception):
             out.append((math.inf, [{k: math.nan for k in SCORES} for _ in held]))
             continue
-        z = route2.residual_vector(c, held, sigma_mu, s2)
+        z = curves_fit.residual_vector(c, held, sigma_mu, s2)
         out.append((float(np.mean(z**2)), [run_errors(m, r, early_strain) for m, r in zip(c, held)]))
     return out
 
@@ -267,7 +267,7 @@ def _fold_job(k, case, replays, doc2, candidates, steady, sigma_mu, settings, s2
         items = [(prm, "model2", settings.friction, sp) for sp in sps]
         if models:
             s2m = replace(s2, max_evals=settings.cv_evals)
-            refit = {m: route2.fit(train, doc2, m, doc2[m], steady, sigma_mu, s2m).values
+            refit = {m: curves_fit.fit(train, doc2, m, doc2[m], steady, sigma_mu, s2m).values
                      for m in ("model1", "model2")}
             for m in ("model1", "model2"):
                 d = dict(doc2)
@@ -288,11 +288,11 @@ def run(replays, doc2: dict, steady: dict, sigma_mu: float, s2: route2.Route2Set
 
     Parameters
     ----------
-    replays : list of route2.Replay
+    replays : list of calibrate.dem_replays.Replay
     doc2 : dict
         The route-2 parameter document (friction laws and both models' fits).
     steady, sigma_mu
-        As for ``route2.fit``.
+        As for ``curves_fit.fit``.
     s2 : route2.Route2Settings
         Tolerances (the integrator must be "batched").
 
@@ -384,6 +384,13 @@ def note_table(note: str) -> pd.DataFrame:
     """``freeform.csv`` when the fit cannot run (e.g. one seed): one row, ``section`` = note."""
     return pd.DataFrame([dict(section="note", key="not fitted", value=math.nan, low=math.nan, high=math.nan,
                               n=math.nan, detail=note)])
+
+
+def not_requested_table() -> pd.DataFrame:
+    """``freeform.csv`` when the fit was not asked for (no ``--freeform``; the workflow's
+    ``calibration.freeform`` false): one row, ``section`` = note, so the file exists either way."""
+    return pd.DataFrame([dict(section="note", key="not requested", value=math.nan, low=math.nan, high=math.nan,
+                              n=math.nan, detail="calibration.freeform is false")])
 
 
 def table(res: dict, settings: FreeformSettings) -> pd.DataFrame:

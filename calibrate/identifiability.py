@@ -41,7 +41,7 @@ import pandas as pd
 
 from model import params_from_dict
 
-from . import fits, route2
+from . import curves_fit, fits, route2
 
 STEP = 1e-3
 REL_THRESHOLD = 1e-3
@@ -82,7 +82,7 @@ def sensitivity(replays, base_doc: dict, model: str, fitted: dict, sigma_mu: flo
     vecs = []
     for item in items:
         c = next(it) if item is not None else ValueError("out of range")
-        vecs.append(None if isinstance(c, Exception) else route2.residual_vector(c, replays, sigma_mu, settings))
+        vecs.append(None if isinstance(c, Exception) else curves_fit.residual_vector(c, replays, sigma_mu, settings))
     if vecs[0] is None:
         raise ValueError(f"identifiability: the {model} optimum cannot be integrated on the calibration runs")
     S = np.full((vecs[0].size, len(keys)), np.nan)

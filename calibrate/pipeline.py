@@ -13,8 +13,8 @@ import pandas as pd
 from dem_contract import fabric_angle_deg, fabric_norm
 from model import default_params, params_from_dict, steady_state
 
-from . import (backsolve, bootstrap, fits, freeform, identifiability, io, profiles, route1, route2,
-               shear_stability, smoothing, tables)
+from . import (backsolve, bootstrap, curves_fit, dem_replays, fits, freeform, identifiability, io, profiles, route1,
+               route2, shear_stability, smoothing, tables)
 
 BLOCKS = ("friction_eq2", "friction_quadratic", "model1", "model2")
 #: Fewest seeds per ensemble for bootstrap intervals worth the name; below it the calibration warns.
@@ -68,7 +68,7 @@ def _route2_start(replays, doc, model, r1_values, steady, sigma_mu, s2, xc_margi
             valid.append((c, params_from_dict(d)))
         except ValueError:
             continue
-    scores = route2.score_many([(prm, model) for _, prm in valid], replays, s2, sigma_mu)   # one batch
+    scores = curves_fit.score_many([(prm, model) for _, prm in valid], replays, s2, sigma_mu)   # one batch
     for (c, prm), sc in zip(valid, scores):   # a start that cannot shear steadily would be a flat, failed objective
         if math.isfinite(sc["score"]) and shear_stability.check_block(prm, model)["stable"]:
             return dict(c)
@@ -155,19 +155,19 @@ def fit_route2(cases, samples, steady, r1, doc1, settings: Settings, log):
 
     Returns
     -------
-    replays : list of route2.Replay
+    replays : list of dem_replays.Replay
     r2 : dict
         model -> ``fits.FitResult``.
     doc2 : dict
         ``doc1`` with the route-2 model blocks.
     """
     t0 = time.time()
-    replays = route2.prepare(cases, samples, settings.backsolve)
+    replays = dem_replays.prepare(cases, samples, settings.backsolve)
     r2, doc2 = {}, dict(doc1)
     for model in ("model1", "model2"):
         start = _route2_start(replays, doc1, model, r1[model].values, steady, r1["sigma_mu"], settings.route2,
                               settings.xc_margin)
-        r2[model] = route2.fit(replays, doc1, model, start, steady, r1["sigma_mu"], settings.route2)
+        r2[model] = curves_fit.fit(replays, doc1, model, start, steady, r1["sigma_mu"], settings.route2)
         doc2[model] = r2[model].values
         log(f"route 2 {model}: {r2[model].extra['evaluations']} evaluations, {r2[model].message} "
             f"({time.time() - t0:.1f} s in route 2)")
@@ -178,9 +178,11 @@ def fit_freeform(replays, doc2, steady, r1, out: Path, settings: Settings, log):
     """Step 5b (only with ``settings.freeform``): free-form alphas against Models 1 and 2, ``freeform.csv``.
 
     Returns the curves for Figs. 3a, 3b (``freeform.curves_for_figure``) and the ``fit_quality.csv`` row of
-    the free-form set's shear stability (``shear_stability.check``), or (None, None) when the step is off.
+    the free-form set's shear stability (``shear_stability.check``), or (None, None) when the step is off
+    (``freeform.csv`` then says so in one note row).
     """
     if settings.freeform is None:
+        tables.write_csv(freeform.not_requested_table(), out / "freeform.csv")
         return None, None
     seeds = sorted({r.case for r in replays})
     if len(seeds) < 2:
@@ -309,7 +311,7 @@ def score_routes(replays, heldout, r1, r2, doc1, doc2, settings: Settings):
     quality, default_route = [], {"friction_eq2": "mu_vs_X", "friction_quadratic": "mu_vs_X"}
     n_used = int(r1["bins"].loc[r1["bins"]["used"], "n_samples"].sum())  # samples in the bins route 1 fits
     pairs = [(model, route, doc) for model in ("model1", "model2") for route, doc in (("backsolve", doc1), ("curves", doc2))]
-    ins_all = dict(zip([(m, r) for m, r, _ in pairs], route2.score_many(
+    ins_all = dict(zip([(m, r) for m, r, _ in pairs], curves_fit.score_many(
         [(params_from_dict(doc), model) for model, _, doc in pairs], replays, settings.route2, sigma_mu)))
     for model in ("model1", "model2"):
         ins_scores = {}
@@ -546,6 +548,8 @@ def write_tables(out: Path, final, ptab, btab, quality, heldout, values) -> None
     tables.write_csv(pd.DataFrame(quality), out / "fit_quality.csv")
     if len(heldout):  # a failed replicate: NaN scores, the reason in 'failure'
         tables.write_csv(heldout.replace([np.inf, -np.inf], np.nan), out / "heldout_scores.csv")
+    else:  # no replicate held a seed out (one seed): the header alone
+        tables.write_csv(pd.DataFrame(columns=bootstrap.HELDOUT_COLUMNS), out / "heldout_scores.csv")
     tables.write_csv(values, out / "bootstrap_values.csv")
 
 

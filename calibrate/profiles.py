@@ -9,7 +9,7 @@ the profile is
           \qquad C = \tfrac12 \lVert r \rVert^2,
 
 with :math:`r` route 2's normalised residuals (``route2``, module Notes).
-Each grid point is one ``route2.fit`` with ``fixed={name: g}`` under a budget
+Each grid point is one ``curves_fit.fit`` with ``fixed={name: g}`` under a budget
 of ``ProfileSettings.evals`` model evaluations, warm-started by continuation:
 the grid is walked outwards from the estimate in two chains (below, above),
 each point started from its neighbour's re-fit (the full fit for the first).
@@ -50,7 +50,7 @@ from scipy import stats
 
 from model import params_from_dict
 
-from . import fits, io, route2
+from . import curves_fit, fits, io, route2
 
 #: The parameters profiled per model block.
 PROFILED = {"model1": ("c1", "c2", "X_c"), "model2": ("c1", "c2", "c3")}
@@ -86,7 +86,7 @@ def grid(model: str, name: str, estimate: float, x_lower: float, settings: Profi
 
 
 def bounds_of(model: str, name: str, x_lower: float) -> tuple:
-    """The search bounds of one parameter of ``route2.fit`` (Model 2: none)."""
+    """The search bounds of one parameter of ``curves_fit.fit`` (Model 2: none)."""
     if model == "model1":
         lo, hi = fits.model1_bounds(x_lower)
         k = fits.M1_KEYS.index(name)
@@ -118,14 +118,14 @@ def profile(replays, base_doc: dict, model: str, fitted: dict, steady: dict, sig
 
     Parameters
     ----------
-    replays : list of route2.Replay
+    replays : list of calibrate.dem_replays.Replay
     base_doc : dict
         The parameter document holding the friction laws (route 1's).
     model : {"model1", "model2"}
     fitted : dict
         The block's route-2 values (the optimum, and every re-fit's start).
     steady, sigma_mu, r2settings
-        As for ``route2.fit``.
+        As for ``curves_fit.fit``.
     x_lower : float, optional
         X_c's lower bound (default ``fits.xc_lower_bound(steady, r2settings.xc_margin)``).
     widths : dict, optional
@@ -141,7 +141,7 @@ def profile(replays, base_doc: dict, model: str, fitted: dict, steady: dict, sig
     xl = fits.xc_lower_bound(steady, r2settings.xc_margin) if x_lower is None else x_lower
     s = replace(r2settings, max_evals=settings.evals)
     prm = params_from_dict({**base_doc, model: dict(fitted)})
-    resid = route2.residuals(prm, replays, model, FRICTION[model], sigma_mu, r2settings)
+    resid = curves_fit.residuals(prm, replays, model, FRICTION[model], sigma_mu, r2settings)
     steady_r = fits.steady_fabric_residuals(*(fits.alpha_model1 if model == "model1" else fits.alpha_model2)(
         steady["X"], *[fitted[k] for k in (fits.M1_KEYS if model == "model1" else fits.M2_KEYS)]),
         steady, r2settings.steady_weight)
@@ -155,7 +155,7 @@ def profile(replays, base_doc: dict, model: str, fitted: dict, steady: dict, sig
         """One chain of re-fits outwards from the optimum, each started from the last that could be integrated."""
         start, out = dict(fitted), []
         for g in values:
-            f = route2.fit(replays, base_doc, model, {**start, name: g}, steady, sigma_mu, s, x_lower=xl,
+            f = curves_fit.fit(replays, base_doc, model, {**start, name: g}, steady, sigma_mu, s, x_lower=xl,
                            fixed={name: g})
             out.append((g, f))
             if f.success:

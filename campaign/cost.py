@@ -167,7 +167,7 @@ def scene_disks(scene: dict) -> int:
     """N of a scene (``n_disks`` of its geometry, material, pack and cell kind)."""
     mat, geo = scene["material"], scene["geometry"]
     return n_disks(geo["H_over_d"], geo["W_over_H"], scene_value(scene, "pack", "solid_fraction_guess"),
-                   mat["size_ratio_min"], mat["size_ratio_max"], (scene.get("cell") or {}).get("kind", "walls"))
+                   mat["size_ratio_min"], mat["size_ratio_max"], (scene.get("cell") or {}).get("kind", scene_default("cell", "kind")))
 
 
 def reversal_stages(scene: dict) -> list[str]:

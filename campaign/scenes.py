@@ -8,6 +8,8 @@ import copy
 import json
 from pathlib import Path
 
+from .schema_defaults import cell_kind
+
 # Config blocks copied into the scene as they are (the config's names are the scene's).
 PASSTHROUGH = ["timestep", "pack", "preshear", "sampling", "effects", "run", "guards"]
 # Scene blocks that cannot change a DEM result: wall-clock intervals of checkpoints and progress lines.
@@ -31,7 +33,7 @@ def scene_from_config(config: dict, case: dict, label: str) -> dict:
         The case label, kept in ``meta`` for the sidecars.
     """
     cell = config["cell"]
-    kind = cell.get("kind", "walls")
+    kind = cell_kind(config)
     scene = {
         "seed": case["seed"],
         "meta": {"case": label, "campaign": config["campaign"]},

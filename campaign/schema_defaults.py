@@ -33,6 +33,19 @@ def block_defaults(*keys: str, path=SCHEMA) -> dict:
     return {name: prop["default"] for name, prop in node.get("properties", {}).items() if "default" in prop}
 
 
+def default(*keys: str, path=SCHEMA):
+    """The ``default`` the schema declares for the config key at ``keys``: ``default("cell", "kind")`` -> ``"walls"``."""
+    node = schema(path)
+    for key in keys:
+        node = node["properties"][key]
+    return node["default"]
+
+
+def cell_kind(config: dict) -> str:
+    """The campaign cell's kind (``cell.kind``), the schema's default where the config (not yet validated) has none."""
+    return (config.get("cell") or {}).get("kind", default("cell", "kind"))
+
+
 def with_defaults(config: dict, path=SCHEMA) -> dict:
     """``config`` with the schema's defaults filled in, in place, as the Snakefile's ``validate`` fills them
     (``snakemake.utils.validate``): for a command that reads config files without Snakemake. It raises

@@ -7,7 +7,7 @@ r"""Command line of the claims stage.
         [--resamples 2000] [--seed 0] [--preset paper=config/config.yaml ...] [--pole-start] --out results/claims
         # -> paper_claims.csv, paper_claims.png, power.csv, reversal_design.csv, eq2_vs_paper.csv/.png,
         #    README_section.md
-        # --pole-start: every set's pole_start_predictions.csv too (python -m compare.pole_start): the rows of
+        # --pole-start: every set's pole_start_predictions.csv too (python -m compare.pole_start_predict): the rows of
         #   the paper's configuration of Model 1 (4-start-step, 4-start-sin)
     python -m claims plan --table results/claims/paper_claims.csv --dem results/dem/<case> ... \
         [--protocols heaviside sinusoidal ...] --out results/claims/plan.csv
@@ -25,7 +25,7 @@ from pathlib import Path
 
 from dem_contract import REVERSAL_PROTOCOLS, DEMInputError
 
-from . import design, eq2, inputs, plan, pole_start, power, report, table
+from . import design, eq2, inputs, plan, pole_start_claim, power, report, table
 
 
 def build_parser():
@@ -69,7 +69,7 @@ def main(argv=None) -> int:
             raise ValueError(f"--resamples = {args.resamples}: must be at least 100")
         out = Path(args.out)
         out.mkdir(parents=True, exist_ok=True)
-        pred = (pole_start.read_variant(args.compare, args.sets) if args.pole_start
+        pred = (pole_start_claim.read_variant(args.compare, args.sets) if args.pole_start
                 else inputs.read_comparison(args.compare, args.sets))
         dem_cases = [inputs.read_dem_case(d, args.protocols) for d in args.dem]
         params = Path(args.calibration) if args.calibration else Path(args.compare).parent / "calibration" / "all" / "params.yaml"

@@ -694,7 +694,7 @@ def claims_table(pred: pd.DataFrame, dem_cases: list, eq2=None, n_resamples=stat
     Parameters
     ----------
     pred : DataFrame
-        ``inputs.read_comparison`` (with ``claims.pole_start.read_variant``'s rows of source
+        ``inputs.read_comparison`` (with ``claims.pole_start_claim.read_variant``'s rows of source
         ``model1_start``: adds the rows of the paper's configuration of Model 1, ``4-start-*``).
     dem_cases : list of inputs.DemCase
     eq2 : dict, optional

@@ -10,8 +10,27 @@ from __future__ import annotations
 
 import re
 
+#: A number as it stands in a label (``format_number``'s text): no ``_`` and no ``/``.
+NUMBER = r"[^_/]+"
+
+
+def label_pattern(named_groups: bool = False) -> str:
+    """A case label as a regular expression without anchors: the one writing of its form.
+
+    With ``named_groups`` the ensemble (``group``, ``p.._I..``), ``pressure``, ``inertial_number``
+    and ``seed`` are groups (``LABEL_RE``); without, it has no group at all, as a Snakemake wildcard
+    constraint must (``WILDCARD_CONSTRAINT``: every named group of a rule's pattern is a wildcard).
+    """
+    def part(name: str, body: str) -> str:
+        return f"(?P<{name}>{body})" if named_groups else body
+
+    return part("group", f"p{part('pressure', NUMBER)}_I{part('inertial_number', NUMBER)}") + f"_s{part('seed', '[0-9]+')}"
+
+
 #: A case label, with the ensemble (``p.._I..``) and the seed as groups.
-LABEL_RE = re.compile(r"^(?P<group>p(?P<pressure>[^_/]+)_I(?P<inertial_number>[^_/]+))_s(?P<seed>[0-9]+)$")
+LABEL_RE = re.compile(f"^{label_pattern(named_groups=True)}$")
+#: The constraint of the ``{case}`` wildcard of the DEM rules (workflow/rules/dem.smk).
+WILDCARD_CONSTRAINT = label_pattern()
 
 
 def format_number(x: float) -> str:

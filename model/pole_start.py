@@ -35,7 +35,7 @@ from .params import load_params, params_from_dict
 SQRT2 = float(np.sqrt(2.0))
 #: Smallest offset of the pole above the start X: the pole term is c_i X^4 / delta at the start.
 DELTA_MIN = 1e-4
-#: The fitted block of the variant (``calibrate.pole_start``): Eq. 6's a_i, b_i, c_i and delta in place of X_c.
+#: The fitted block of the variant (``calibrate.pole_start_fit``): Eq. 6's a_i, b_i, c_i and delta in place of X_c.
 KEYS = ("a1", "b1", "c1", "a2", "b2", "c2", "delta")
 FORMAT_TAG = "model1-pole-at-start"
 #: A far pole for the forward part before a sinusoidal reversal (X < 0 there: no pole term).
@@ -83,7 +83,7 @@ def block_params(base_doc: dict, vals: dict):
 
 
 def load(path) -> tuple:
-    """A ``pole_start.yaml`` (``calibrate.pole_start``): (its set's ``ModelParams`` with the variant's a_i, b_i, c_i;
+    """A ``pole_start.yaml`` (``calibrate.pole_start_fit``): (its set's ``ModelParams`` with the variant's a_i, b_i, c_i;
     delta).
 
     Raises

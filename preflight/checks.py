@@ -31,7 +31,7 @@ from campaign.calibration_sets import calibration_sets, same_value
 from campaign.cases import cases, rates
 from campaign.configfile import ConfigProblem, configfile_problems, load_configfile  # noqa: F401 (re-exported)
 from campaign.scene_spec import inertial_number_range, lammps_refusals, protocol_strain, scene_default, scene_module
-from campaign.schema_defaults import SCHEMA, schema as read_schema
+from campaign.schema_defaults import SCHEMA, cell_kind, schema as read_schema
 from campaign.scenes import scene_from_config
 from dem_contract.labels import case_label, format_number
 
@@ -151,7 +151,7 @@ def cell_problems(config: dict) -> list[str]:
         out.append(problem("sampling.fine_interval", s["fine_interval"],
                            f"is above sampling.coarse_interval = {_v(s['coarse_interval'])}",
                            "fine_interval <= coarse_interval"))
-    periodic = cell.get("kind", "walls") == "periodic"
+    periodic = cell_kind(config) == "periodic"
     if not periodic:
         out += _bulk_problems(cell["H_over_d"], s.get("bulk_exclusion_d", scene_default("sampling", "bulk_exclusion_d")),
                               "the gap cell.H_over_d")
@@ -193,7 +193,7 @@ WALL_ONLY_KEYS = (("sampling", "bulk_exclusion_d"),)
 
 def periodic_cell_key_problems(config: dict) -> list[str]:
     """A wall cell's key given to a periodic cell is an error, as ``cell.mass`` given to a wall cell is."""
-    if (config.get("cell") or {}).get("kind", "walls") != "periodic":
+    if cell_kind(config) != "periodic":
         return []
     return [problem(f"{section}.{key}", config[section][key],
                     "applies to a wall cell only (a periodic cell has no wall layers to leave out)",
@@ -350,7 +350,7 @@ def study_problems(config: dict) -> list[str]:
         points = grid.unique_points(grid.expand(acc))
     except (ValueError, KeyError) as exc:
         return [f"config error: {str(exc).strip(chr(39))}"]
-    if config["cell"].get("kind", "walls") == "periodic":
+    if cell_kind(config) == "periodic":
         return []
     bulk = config["sampling"].get("bulk_exclusion_d", scene_default("sampling", "bulk_exclusion_d"))
     out = []

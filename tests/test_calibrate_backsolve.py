@@ -3,15 +3,8 @@ import numpy as np
 import pytest
 
 from calibrate import backsolve, io, smoothing, synthetic
-from model import alpha_model1, default_params, params_from_dict, steady_state_constant
-
-TRUTH_M1 = dict(a1=-0.85, b1=0.0, c1=-3000.0, a2=-5.0, b2=100.0, c2=2000.0, X_c=0.0827)
-
-
-def truth_params():
-    d = default_params().to_dict()
-    d["model1"] = dict(TRUTH_M1)
-    return params_from_dict(d)
+from model import alpha_model1, steady_state_constant
+from tests.helpers import TRUTH_M1, truth_params
 
 
 def exact_rates(a, b, g, alpha1, alpha2):

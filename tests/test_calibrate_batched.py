@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import model.batched
-from calibrate import route2, synthetic
+from calibrate import curves_fit, dem_replays, route2, synthetic
 from calibrate.backsolve import BacksolveSettings
 from calibrate.io import read_cases, steady_values
 from calibrate.smoothing import smooth_cases
@@ -27,7 +27,7 @@ TIGHT = dict(rtol=1e-10, atol=1e-12)
 def replays(tmp_path_factory):
     dirs = synthetic.write_ensemble(tmp_path_factory.mktemp("cb") / "dem", truth_params(), seeds=(1, 2))
     cases = read_cases(dirs)
-    return route2.prepare(cases, smooth_cases(cases), BacksolveSettings()), steady_values(cases)
+    return dem_replays.prepare(cases, smooth_cases(cases), BacksolveSettings()), steady_values(cases)
 
 
 def with_model1(**changes):
@@ -41,8 +41,8 @@ def test_batched_and_loop_residuals_agree_to_1e6(replays):
     loop = route2.Route2Settings(integrator="loop", **TIGHT)
     for prm, model, friction in ((truth_params(), "model1", "eq2"), (truth_params(), "model2", "quadratic"),
                                  (with_model1(a1=-1.0, c2=2500.0), "model1", "eq2")):
-        r_loop = route2.residuals(prm, reps, model, friction, SIGMA_MU, loop)
-        r_batch = route2.residuals(prm, reps, model, friction, SIGMA_MU, replace(loop, integrator="batched"))
+        r_loop = curves_fit.residuals(prm, reps, model, friction, SIGMA_MU, loop)
+        r_batch = curves_fit.residuals(prm, reps, model, friction, SIGMA_MU, replace(loop, integrator="batched"))
         assert np.max(np.abs(r_batch - r_loop)) < 1e-6, model
 
 
@@ -59,7 +59,7 @@ def test_a_failing_parameter_set_in_a_batch_fails_alone(replays):
         (alone,) = route2.curves([(prm, "model1", "eq2")], reps, s)
         for m_batch, m_alone in zip(got[k], alone):
             np.testing.assert_array_equal(m_batch, m_alone)
-    scores = route2.score_many([(good, "model1"), (pole, "model1")], reps, s, SIGMA_MU)
+    scores = curves_fit.score_many([(good, "model1"), (pole, "model1")], reps, s, SIGMA_MU)
     assert np.isfinite(scores[0]["score"]) and scores[1]["score"] == np.inf
     assert scores[1]["failure"].startswith("PoleError")
 
@@ -80,9 +80,9 @@ def test_the_integrator_option_selects_the_path(replays, monkeypatch):
     reps, _ = replays
     batch_calls = count_calls(monkeypatch, route2, "simulate_batch")
     loop_calls = count_calls(monkeypatch, route2, "simulate")
-    route2.residuals(truth_params(), reps, "model1", "eq2", SIGMA_MU, route2.Route2Settings(integrator="loop"))
+    curves_fit.residuals(truth_params(), reps, "model1", "eq2", SIGMA_MU, route2.Route2Settings(integrator="loop"))
     assert (len(batch_calls), len(loop_calls)) == (0, len(reps))
-    route2.residuals(truth_params(), reps, "model1", "eq2", SIGMA_MU, route2.Route2Settings())
+    curves_fit.residuals(truth_params(), reps, "model1", "eq2", SIGMA_MU, route2.Route2Settings())
     assert (len(batch_calls), len(loop_calls)) == (1, len(reps))
     with pytest.raises(ValueError, match="integrator"):
         route2.Route2Settings(integrator="rk4")
@@ -93,10 +93,10 @@ def test_a_fit_batches_its_jacobian_and_matches_the_loop(replays, monkeypatch):
     doc = truth_params().to_dict()
     start = {**TRUTH_M1, "a1": -0.8, "a2": -4.5}
     loop = route2.Route2Settings(integrator="loop", max_evals=40, **TIGHT)
-    f_loop = route2.fit(reps, doc, "model1", start, steady, SIGMA_MU, loop)
+    f_loop = curves_fit.fit(reps, doc, "model1", start, steady, SIGMA_MU, loop)
     calls = count_calls(monkeypatch, model.batched, "simulate_batch")
     monkeypatch.setattr(route2, "simulate_batch", model.batched.simulate_batch)
-    f_batch = route2.fit(reps, doc, "model1", start, steady, SIGMA_MU, replace(loop, integrator="batched"))
+    f_batch = curves_fit.fit(reps, doc, "model1", start, steady, SIGMA_MU, replace(loop, integrator="batched"))
     n = f_batch.extra["evaluations"]
     assert n == f_loop.extra["evaluations"]
     assert len(calls) <= n / 4    # 7 parameters: the 7 Jacobian points of a step in one call

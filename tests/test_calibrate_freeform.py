@@ -20,8 +20,9 @@ from model import default_params, params_from_dict, steady_shear, steady_state
 from model.batched import simulate_batch
 from model.laws import AlphaSpline, spline_basis, spline_of_linear
 
+from tests.helpers import truth_params
+
 M2 = default_params().model2   # alpha1 = c1 = -0.3, alpha2 = c2 + c3 X = -2 + 25 X
-TRUTH_M1 = dict(a1=-0.85, b1=0.0, c1=-3000.0, a2=-5.0, b2=100.0, c2=2000.0, X_c=0.0827)
 FAST = freeform.FreeformSettings(n_breaks=4, penalties=(1e-4, 1.0), layouts=((4, 1.0), (4, 2.0)), cv_evals=30,
                                  max_evals=90, n_resamples=500)
 
@@ -109,9 +110,7 @@ def model2_truth(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def model1_truth(tmp_path_factory):
-    doc = default_params().to_dict()
-    doc["model1"] = dict(TRUTH_M1)
-    d = _to_route2(tmp_path_factory.mktemp("ff1"), params_from_dict(doc), "model1", noise=0.5)
+    d = _to_route2(tmp_path_factory.mktemp("ff1"), truth_params(), "model1", noise=0.5)
     d["res"] = freeform.run(d["replays"], d["doc2"], d["steady"], d["sigma_mu"], d["s2"], FAST, log=lambda m: None)
     return d
 

@@ -11,9 +11,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from calibrate import pipeline, route2, synthetic
-from calibrate import pole_start as cps
-from compare import pole_start as mps
+from calibrate import dem_replays, pipeline, synthetic
+from calibrate import pole_start_fit as cps
+from compare import pole_start_predict as mps
 from compare.dem import load_reversals
 from dem_contract.synthetic import FABRIC_NOISE, MU_NOISE
 from model import default_params, load_params, save_params, steady_state
@@ -68,7 +68,7 @@ def test_model_curves_at_zero_offset_are_finite_or_a_named_failure(truth_fit):
     settings = pipeline.Settings(protocols=("heaviside", "sinusoidal"))
     cases = pipeline.read_inputs(dirs, settings)
     samples, _ = pipeline.smooth(cases, settings)
-    replays = route2.prepare(cases, samples, settings.backsolve)
+    replays = dem_replays.prepare(cases, samples, settings.backsolve)
     doc = load_params(truth_fit[0] / "start.yaml").to_dict()
     doc.pop("provenance", None)
     doc.pop("intervals", None)
@@ -122,7 +122,7 @@ def _curves(n_seeds=6, offsets=None, seed=0):
 
 
 def test_claims_rows_say_reproduced_when_the_variant_follows_the_fall_better_than_both_models():
-    from claims.pole_start import variant_rows
+    from claims.pole_start_claim import variant_rows
 
     t = variant_rows(_curves(offsets={"model1_start": 0.001, "model1": 0.02, "model2": 0.022}), n_resamples=500)
     assert list(t["claim_id"]) == ["4-start-m1-sin", "4-start-m2-sin"]      # per figure (issue 32)
@@ -132,7 +132,7 @@ def test_claims_rows_say_reproduced_when_the_variant_follows_the_fall_better_tha
 
 
 def test_claims_rows_never_say_reproduced_when_the_variant_is_worse():
-    from claims.pole_start import variant_rows
+    from claims.pole_start_claim import variant_rows
 
     t = variant_rows(_curves(offsets={"model1_start": 0.022, "model1": 0.002, "model2": 0.002}), n_resamples=500)
     assert not t["verdict"].str.contains("reproduced").any()

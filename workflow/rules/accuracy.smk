@@ -66,7 +66,7 @@ rule calibration_cost:
     params:
         protocol_sets=[
             word
-            for name, spec in config.get("calibration", {}).get("sets", {}).items()
+            for name, spec in config["calibration"].get("sets", {}).items()
             if "protocols" in spec and set(spec) == {"protocols"}
             for word in ("--protocol-set", f"{name}={','.join(spec['protocols'])}")
         ],

@@ -40,15 +40,12 @@ CALIBRATION_EXTRA = {
 }
 # calibration.freeform: the free-form alpha1(X), alpha2(X) fit (calibrate/freeform.py), its table
 # beside the others and its curves on Figs. 3a, 3b. freeform.csv is declared either way (without
-# the option the rule writes its header and one note row, as calibrate does for a fit it cannot
-# run), so a toggle changes only params and the params trigger reruns every set: an output
-# declared only with the option has no metadata in a finished set, and Snakemake then checks
-# neither its params nor, unless a target asks for it, that the file is missing.
+# the option calibrate writes its header and one note row, as it does for a fit it cannot run),
+# so a toggle changes only params and the params trigger reruns every set: an output declared
+# only with the option has no metadata in a finished set, and Snakemake then checks neither its
+# params nor, unless a target asks for it, that the file is missing. Likewise calibrate writes
+# heldout_scores.csv always: its header alone when no bootstrap replicate held a seed out (one seed).
 CALIBRATION_FREEFORM = config["calibration"]["freeform"]
-FREEFORM_NOT_ASKED = "section,key,value,low,high,n,detail\nnote,not requested,,,,,calibration.freeform is false"
-# calibrate writes heldout_scores.csv only when a bootstrap replicate held a seed
-# out (never with one seed): the rule then leaves its header alone in the file.
-HELDOUT_HEADER = "replicate,route,model,n_heldout_runs"
 
 
 def calibration_params(calset):
@@ -111,8 +108,6 @@ rule calibrate:
     shell:
         "{PY:q} -m calibrate --dem {params.dirs:q} --protocols {params.protocols:q}"
         " --out {params.out:q} {params.freeform:q} {params.options:q} > {log:q} 2>&1"
-        " && {{ test -e {output.heldout:q} || echo {HELDOUT_HEADER:q} > {output.heldout:q}; }}"
-        " && {{ test -e {output.freeform:q} || printf '%s\\n' {FREEFORM_NOT_ASKED:q} > {output.freeform:q}; }}"
 
 
 def calibration_targets():

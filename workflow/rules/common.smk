@@ -6,7 +6,7 @@ from campaign.cases import cases
 from campaign.scenes import result_key, scene_from_config, scene_of_result_key, write_scene
 
 PY = sys.executable  # the venv's python that runs snakemake also runs the stages
-RESULTS = config.get("results_dir", "results")
+RESULTS = config["results_dir"]  # the schema's default when the config has none (Snakefile: validate)
 YADE = "yade"
 
 CASES = cases(config)  # label -> dict(pressure, inertial_number, seed)

@@ -4,11 +4,12 @@
 # below) and instantiated for every results folder that holds DEM cases: the
 # campaign's, the DEM resolution study's (dem_study.smk) and the bulk study's
 # (bulk_study.smk).
+from dem_contract.labels import WILDCARD_CONSTRAINT as CASE_LABEL
 from dem_study import bulk_cells
 from dem_study import grid as dem_grid
 
 wildcard_constraints:
-    case="p[^/_]+_I[^/_]+_s[0-9]+",
+    case=CASE_LABEL,  # the label's one writing (dem_contract/labels.py)
     protocol="|".join(PROTOCOLS),
 
 

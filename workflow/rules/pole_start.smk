@@ -1,11 +1,15 @@
 # Model 1 as the paper configured it: the pole a fitted offset delta above each run's start
 # (X_c = max(X_rev, 0) + delta, model/pole_start.py; docs/model.md, Sec. 7b). Beside the
 # stages, in files of its own, so the tables of Models 1 and 2 do not change:
-#   results/calibration/<set>/pole_start.yaml, pole_start_profile.csv   (calibrate.pole_start)
-#   results/compare/<set>/pole_start_predictions.csv, pole_start_errors.csv  (compare.pole_start)
+#   results/calibration/<set>/pole_start.yaml, pole_start_profile.csv   (calibrate.pole_start_fit)
+#   results/compare/<set>/pole_start_predictions.csv, pole_start_errors.csv  (compare.pole_start_predict)
 #   results/claims/pole_start.csv: claim 4's statistic, the variant against Model 1 and Model 2
-# The fit's budget follows the calibration options (--route2-evals, --profile-points), read from
-# the words calibrate itself gets (CALIBRATE_OPTIONS, calibrate.smk; campaign/stage_options.py).
+# The fit's budget follows the calibration options (--route2-evals, --profile-points): the words
+# calibrate itself gets (CALIBRATE_OPTIONS, calibrate.smk), read by calibrate's own parser
+# (calibrate.pole_start_fit.budget), its defaults included.
+from calibrate.pole_start_fit import budget as pole_start_budget
+
+POLE_START_EVALS, POLE_START_POINTS = pole_start_budget(CALIBRATE_OPTIONS)
 
 
 rule pole_start_calibrate:
@@ -22,8 +26,8 @@ rule pole_start_calibrate:
     params:
         dirs=lambda wc: [case_dir(label) for label in CALIBRATION_SETS[wc.calset]["cases"]],
         protocols=lambda wc: CALIBRATION_SETS[wc.calset]["protocols"],
-        evals=stage_options.given_int(CALIBRATE_OPTIONS, "--route2-evals", 300),
-        points=stage_options.given_int(CALIBRATE_OPTIONS, "--profile-points", 10),
+        evals=POLE_START_EVALS,
+        points=POLE_START_POINTS,
     priority: set_priority
     resources:
         runtime=COST_CALIBRATE.runtime,
@@ -34,7 +38,7 @@ rule pole_start_calibrate:
         f"{RESULTS}/benchmarks/calibration/pole_start_{{calset}}.tsv"
     threads: 1
     shell:
-        "{PY:q} -m calibrate.pole_start --dem {params.dirs:q} --params {input.params:q} --protocols {params.protocols:q}"
+        "{PY:q} -m calibrate.pole_start_fit --dem {params.dirs:q} --params {input.params:q} --protocols {params.protocols:q}"
         " --max-evals {params.evals:q} --profile-points {params.points:q} --out {output.fit:q} > {log:q} 2>&1"
 
 
@@ -60,7 +64,7 @@ rule pole_start_compare:
         f"{RESULTS}/benchmarks/compare/pole_start_{{calset}}.tsv"
     threads: 1
     shell:
-        "{PY:q} -m compare.pole_start --dem {params.dirs:q} --fit {input.fit:q} --set {wildcards.calset:q}"
+        "{PY:q} -m compare.pole_start_predict --dem {params.dirs:q} --fit {input.fit:q} --set {wildcards.calset:q}"
         " --protocols {params.protocols:q} --train-cases {params.train_cases:q}"
         " --train-protocols {params.train_protocols:q} --out {params.out:q} > {log:q} 2>&1"
 
@@ -85,7 +89,7 @@ rule pole_start_claims:
         f"{RESULTS}/benchmarks/claims/pole_start.tsv"
     threads: 1
     shell:
-        "{PY:q} -m claims.pole_start --compare {COMPARE:q} --sets {params.sets:q} --resamples {params.resamples:q}"
+        "{PY:q} -m claims.pole_start_claim --compare {COMPARE:q} --sets {params.sets:q} --resamples {params.resamples:q}"
         " --out {output:q} > {log:q} 2>&1"
 
 

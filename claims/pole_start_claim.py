@@ -1,8 +1,8 @@
 r"""Claim 4 for Model 1 as the paper configured it: the pole at each run's start ("model1_start").
 
 The paper puts Eq. 6's pole at the start of the reversal (X_c = 0.0827, just
-above the mirrored steady X). ``calibrate.pole_start`` fits that configuration
-(X_c = max(X_rev, 0) + delta per run) and ``compare.pole_start`` predicts
+above the mirrored steady X). ``calibrate.pole_start_fit`` fits that configuration
+(X_c = max(X_rev, 0) + delta per run) and ``compare.pole_start_predict`` predicts
 every run with it. The claims table scores it as the paper's Model 1 against
 Model 2 (rows ``4-start-step`` and ``4-start-sin``, given the variant's
 predictions: ``python -m claims --pole-start``). This table scores it on
@@ -21,7 +21,7 @@ claims table's. The file is ``results/claims/pole_start.csv`` (columns of
 
 Command line::
 
-    python -m claims.pole_start --compare results/compare [--sets all heaviside_only] \
+    python -m claims.pole_start_claim --compare results/compare [--sets all heaviside_only] \
         --out results/claims/pole_start.csv [--resamples 2000]
 """
 from __future__ import annotations
@@ -49,7 +49,7 @@ def read_variant(compare_dir, sets=None) -> pd.DataFrame:
     sets = [s for s in (sets or inputs.comparison_sets(compare_dir))
             if (compare_dir / s / "pole_start_predictions.csv").is_file()]
     if not sets:
-        raise DEMInputError(f"{compare_dir}: no <set>/pole_start_predictions.csv (run python -m compare.pole_start)")
+        raise DEMInputError(f"{compare_dir}: no <set>/pole_start_predictions.csv (run python -m compare.pole_start_predict)")
     base = inputs.read_comparison(compare_dir, sets)
     frames = [base]
     for name in sets:
@@ -82,7 +82,7 @@ def variant_rows(pred: pd.DataFrame, n_resamples=stats.N_RESAMPLES, seed=0) -> p
 
 
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m claims.pole_start", description=__doc__.split("\n\n")[0])
+    ap = argparse.ArgumentParser(prog="python -m claims.pole_start_claim", description=__doc__.split("\n\n")[0])
     ap.add_argument("--compare", required=True, help="the comparison folder, results/compare")
     ap.add_argument("--sets", nargs="*", default=None, help="calibration sets (default: every one with the variant)")
     ap.add_argument("--resamples", type=int, default=stats.N_RESAMPLES)
@@ -91,7 +91,7 @@ def main(argv=None) -> int:
     try:
         table = variant_rows(read_variant(args.compare, args.sets), args.resamples)
     except (DEMInputError, ValueError) as exc:
-        print(f"claims.pole_start: error: {exc}", file=sys.stderr)
+        print(f"claims.pole_start_claim: error: {exc}", file=sys.stderr)
         return 2
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
     table.to_csv(args.out, index=False)

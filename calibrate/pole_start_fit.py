@@ -25,9 +25,12 @@ threshold has its lower end at 0: the data cannot tell the pole from the start.
 
 Command line::
 
-    python -m calibrate.pole_start --dem results/dem/<case> ... --params results/calibration/<set>/params.yaml \
+    python -m calibrate.pole_start_fit --dem results/dem/<case> ... --params results/calibration/<set>/params.yaml \
         --protocols heaviside sinusoidal --out results/calibration/<set>/pole_start.yaml
         # -> pole_start.yaml (fitted block, delta and its profile interval), pole_start_profile.csv
+
+The workflow gives the fit the budget of its set's calibration (``budget``): calibrate's own options
+(``calibration.options``), read by calibrate's parser, set ``--max-evals`` and ``--profile-points``.
 """
 from __future__ import annotations
 
@@ -47,7 +50,7 @@ from model.batched import simulate_batch
 from model.pole_start import (DELTA_MIN, FORMAT_TAG, KEYS, block_params, far_pole, forward_history, load,  # noqa: F401
                               mirrored_x, with_pole)
 
-from . import fits, profiles, route2
+from . import curves_fit, dem_replays, fits, profiles, route2
 from .route2 import FAILURES, Route2Settings
 
 SCALE = np.array([1.0, 10.0, 1e3, 1.0, 10.0, 1e3, 0.01])
@@ -135,7 +138,7 @@ def curves(points, replays, settings: Route2Settings) -> list:
 
 
 def _objective(replays, base_doc, steady, sigma_mu, settings: Route2Settings, n_res, keys, scale, fixed):
-    """``route2.counted_objective`` over the variant's residuals (route 2's, with the steady-state terms)."""
+    """``curves_fit.counted_objective`` over the variant's residuals (route 2's, with the steady-state terms)."""
     def evaluate(points):
         out, trials = [None] * len(points), []
         for k, p in enumerate(points):
@@ -148,14 +151,14 @@ def _objective(replays, base_doc, steady, sigma_mu, settings: Route2Settings, n_
         for (k, vals, _), c in zip(trials, got):
             if isinstance(c, Exception):
                 continue
-            r = route2.residual_vector(c, replays, sigma_mu, settings)
+            r = curves_fit.residual_vector(c, replays, sigma_mu, settings)
             s1, s2 = fits.alpha_model1(steady["X"], *[vals[q] for q in fits.M1_KEYS[:-1]], 1.0)
             r = np.concatenate([r, fits.steady_fabric_residuals(s1, s2, steady, settings.steady_weight)])
             if np.all(np.isfinite(r)):
                 out[k] = r
         return out
 
-    return route2.counted_objective(evaluate, n_res, settings.max_evals)
+    return curves_fit.counted_objective(evaluate, n_res, settings.max_evals)
 
 
 def fit(replays, base_doc: dict, start: dict, steady: dict, sigma_mu: float,
@@ -178,14 +181,14 @@ def fit(replays, base_doc: dict, start: dict, steady: dict, sigma_mu: float,
         sol = least_squares(res, x0, bounds=(lo, hi), x_scale="jac", diff_step=settings.diff_step,
                             max_nfev=settings.max_evals, workers=workers)
         message = sol.message
-    except route2.BudgetExhausted:
+    except curves_fit.BudgetExhausted:
         message = f"budget of {settings.max_evals} model evaluations used up; best point kept"
     p = state["best"] if state["best"] is not None else x0
     vals = {**fixed, **dict(zip(keys, (p * scale).tolist()))}
     vals = {k: float(vals[k]) for k in KEYS}
-    ok = state["best_cost"] < 0.5 * n_res * route2.PENALTY**2
+    ok = state["best_cost"] < 0.5 * n_res * curves_fit.PENALTY**2
     c = curves([(_block_params(base_doc, vals), vals["delta"])], replays, settings)[0] if ok else None
-    resid = (route2.residual_vector(c, replays, sigma_mu, settings)
+    resid = (curves_fit.residual_vector(c, replays, sigma_mu, settings)
              if c is not None and not isinstance(c, Exception) else np.array([]))
     return fits.FitResult("model1_start", vals, float(state["best_cost"]), n_res - fits.N_STEADY,
                           float(np.sqrt(2 * state["best_cost"] / max(n_res, 1))), bool(ok), str(message),
@@ -222,7 +225,7 @@ def fit_multistart(replays, base_doc, steady, sigma_mu, settings: Route2Settings
         v = np.clip([c[k] for k in KEYS], lo, hi)
         clipped.append(dict(zip(KEYS, v.tolist())))
     got = curves([(_block_params(base_doc, c), c["delta"]) for c in clipped], replays, settings)
-    costs = [float(np.sum(route2.residual_vector(g, replays, sigma_mu, settings) ** 2))
+    costs = [float(np.sum(curves_fit.residual_vector(g, replays, sigma_mu, settings) ** 2))
              if not isinstance(g, Exception) else np.inf for g in got]
     order = [i for i in np.argsort(costs) if np.isfinite(costs[i])][:n_fits] or [0]
     results = [fit(replays, base_doc, clipped[i], steady, sigma_mu, settings) for i in order]
@@ -327,7 +330,7 @@ def run(case_dirs, params_path, protocols, out_yaml, max_evals: int = Route2Sett
     cases = pipeline.read_inputs(case_dirs, settings)
     samples, steady = pipeline.smooth(cases, settings)
     sigma_mu = pipeline.route1.mu_noise(samples)
-    replays = route2.prepare(cases, samples, settings.backsolve)
+    replays = dem_replays.prepare(cases, samples, settings.backsolve)
     base = load_params(params_path)
     doc = base.to_dict()
     doc.pop("provenance", None)
@@ -355,8 +358,22 @@ def run(case_dirs, params_path, protocols, out_yaml, max_evals: int = Route2Sett
     return out
 
 
+def budget(calibrate_options: list[str]) -> tuple[int, int]:
+    """``--max-evals`` and ``--profile-points`` of this fit from ``python -m calibrate``'s options, read by its parser.
+
+    ``--route2-evals`` (calibrate's default when not given) and ``--profile-points`` (this fit's
+    ``PROFILE_POINTS`` when not given: the variant's one profile is cheaper than calibrate's).
+    """
+    from .__main__ import parser as calibrate_parser
+
+    ap = calibrate_parser()
+    ap.set_defaults(profile_points=PROFILE_POINTS)
+    a = ap.parse_args(["--dem", "-", "--out", "-", *calibrate_options])
+    return a.route2_evals, a.profile_points
+
+
 def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m calibrate.pole_start", description=__doc__.split("\n\n")[0])
+    ap = argparse.ArgumentParser(prog="python -m calibrate.pole_start_fit", description=__doc__.split("\n\n")[0])
     ap.add_argument("--dem", nargs="+", required=True, help="DEM case directories the set is calibrated on")
     ap.add_argument("--params", required=True, help="the set's params.yaml (its Eq. 2 and Model 1 start)")
     ap.add_argument("--protocols", nargs="+", default=["heaviside", "sinusoidal"])
@@ -367,7 +384,7 @@ def main(argv=None) -> int:
     try:
         run(args.dem, args.params, args.protocols, args.out, args.max_evals, args.profile_points)
     except ValueError as exc:
-        print(f"calibrate.pole_start: error: {exc}", file=sys.stderr)
+        print(f"calibrate.pole_start_fit: error: {exc}", file=sys.stderr)
         return 2
     return 0
 

@@ -1,6 +1,6 @@
 r"""Model 1 with its pole at each run's start ("model1_start") against the DEM, beside Models 1 and 2.
 
-The variant (``model.pole_start``; fitted by ``calibrate.pole_start``) is
+The variant (``model.pole_start``; fitted by ``calibrate.pole_start_fit``) is
 Model 1 with, for each run, :math:`X_c = \max(X_{rev}, 0) + \delta`:
 :math:`X_{rev}` is the model's mirrored X at the run's reversal, from the same
 start fabric ``A0`` and imposed history as Models 1 and 2 (``compare.dem``,
@@ -19,7 +19,7 @@ variant's rows in the layout of ``predictions.csv`` and ``errors.csv``, source
 
 Command line::
 
-    python -m compare.pole_start --dem results/dem/<case> ... --fit results/calibration/<set>/pole_start.yaml \
+    python -m compare.pole_start_predict --dem results/dem/<case> ... --fit results/calibration/<set>/pole_start.yaml \
         --set <set> --protocols heaviside sinusoidal [--train-cases ...] [--train-protocols ...] \
         --out results/compare/<set>
 """
@@ -115,9 +115,9 @@ def main(argv=None) -> int:
     from .cli import protocol_name
     from .dem import DEMInputError
 
-    ap = argparse.ArgumentParser(prog="python -m compare.pole_start", description=__doc__.split("\n\n")[0])
+    ap = argparse.ArgumentParser(prog="python -m compare.pole_start_predict", description=__doc__.split("\n\n")[0])
     ap.add_argument("--dem", nargs="+", required=True, help="DEM case directories results/dem/<label>")
-    ap.add_argument("--fit", required=True, help="pole_start.yaml of the calibration set (calibrate.pole_start)")
+    ap.add_argument("--fit", required=True, help="pole_start.yaml of the calibration set (calibrate.pole_start_fit)")
     ap.add_argument("--set", default="all")
     ap.add_argument("--protocols", nargs="+", default=["heaviside", "sinusoidal"], type=protocol_name)
     ap.add_argument("--train-cases", nargs="*", default=None)
@@ -127,7 +127,7 @@ def main(argv=None) -> int:
     try:
         preds, errors = run(args.dem, args.fit, args.protocols, args.set, args.train_cases, args.train_protocols)
     except (DEMInputError, ValueError) as exc:
-        print(f"compare.pole_start: error: {exc}", file=sys.stderr)
+        print(f"compare.pole_start_predict: error: {exc}", file=sys.stderr)
         return 2
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -136,7 +136,7 @@ def main(argv=None) -> int:
     bad = errors[errors["status"] != "ok"]
     for _, r in bad.iterrows():
         print(f"warning: {MODEL} on {r['case']} ({r['protocol']}): {r['status']}", file=sys.stderr)
-    print(f"compare.pole_start: set {args.set}, {len(args.dem)} case(s) -> {out}")
+    print(f"compare.pole_start_predict: set {args.set}, {len(args.dem)} case(s) -> {out}")
     return 0
 
 
