@@ -2,11 +2,17 @@
 on a constructed runs table with known means (the per-run summary of a real tiny YADE case:
 tests/test_dem_stages.py)."""
 import math
+import subprocess
+import sys
+from pathlib import Path
 
 import pandas as pd
 import pytest
 
+from dem_contract.published import compare_table
 from dem_study import stiffness
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 BASE = dict(inertial_number=1e-3, dt_over_tc=0.3, contact_law="viscel", restitution=0.5)
@@ -60,3 +66,20 @@ def test_fabric_readings_are_paired_by_seed_against_the_contracts():
     # X_no_rattlers - X_contract = -0.002 + e per seed: mean -0.002, s.e. that of e
     assert r.loc[(1e5, "no_rattlers"), "minus_contract"] == pytest.approx(-0.002)
     assert r.loc[(1e5, "no_rattlers"), "minus_contract_se"] == pytest.approx(0.001 / math.sqrt(3))
+
+
+RELEASES = sorted(p.parent for p in (ROOT / "data").glob("stiffness-*/manifest.yaml"))
+DOCUMENTED = ROOT / "docs" / "stiffness"
+
+
+@pytest.mark.skipif(not RELEASES, reason="no stiffness release under data/")
+def test_the_stiffness_study_recomputed_from_its_releases_gives_the_documented_tables(tmp_path):
+    """docs/findings.md's stiffness tables (docs/stiffness/, written by the same command) are what the
+    released runs give without YADE: every setting's row and every fabric reading, to the last digit."""
+    run = subprocess.run([sys.executable, "-m", "dem_study", "stiffness", "--releases", *map(str, RELEASES),
+                          "--out", str(tmp_path)], cwd=ROOT, capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, run.stderr[-2000:]
+    keys = {"stiffness.csv": stiffness.SETTING, "fabric_readings.csv": (*stiffness.SETTING, "reading"),
+            "stiffness_runs.csv": (*stiffness.SETTING, "seed")}
+    for name, key in keys.items():
+        assert compare_table(DOCUMENTED / name, tmp_path / name, keys=key, rtol=1e-9) == [], name
