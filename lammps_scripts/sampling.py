@@ -1,13 +1,10 @@
 """Sampling in LAMMPS: one CSV row per sample (rows.wall_row and measure.bulk), the guards,
 progress lines. A mixin of stages.Stage (yade_scripts/sampling.py's rows and guards).
 """
-import math
 import time
 
-import numpy as np
-
 import measure
-from rows import COLUMNS, fmt, pressure_window_problem, wall_row
+from rows import COLUMNS, fmt, pressure_window_problem, state_problem, wall_row
 from stageerrors import GuardError
 
 
@@ -56,14 +53,9 @@ class Sampling:
         window mean off p (yade_scripts/sampling.py's guards)."""
         st, g, der = self.st, self.scene["guards"], self.der
         d = der["d"]
-        vals = [row[k] for k in ("strain", "sigma_xy", "p", "gap")] + [w["fx_top"], w["fy_top"]]
-        ys = snap.y[: snap.N]
-        if not all(math.isfinite(v) for v in vals) or not np.all(np.isfinite(ys)):
-            raise GuardError(f"NaN in positions or forces at step {it} (t = {row['t']:.4f})")
-        out = np.nonzero((ys < w["y_bot"]) | (ys > w["y_top"]))[0]
-        if len(out):
-            raise GuardError(f"disk {int(out[0])} left the cell at step {it} "
-                             f"(y = {ys[out[0]] / d:.3f} d, walls at {w['y_bot'] / d:.3f} d and {w['y_top'] / d:.3f} d)")
+        why = state_problem(row, w, snap.y[: snap.N], d, f"step {it}")
+        if why is not None:
+            raise GuardError(why)
         ov = float(snap.delta.max()) / d if len(snap.delta) else 0.0
         if ov > g["max_overlap_d"]:
             raise GuardError(f"overlap {ov:.4f} d above guards.max_overlap_d = {g['max_overlap_d']:g} "

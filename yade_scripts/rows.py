@@ -1,9 +1,11 @@
 """One row of a stage's series from the walls' state, and what the guards and sidecars share.
 
-Pure Python (no YADE, no LAMMPS): both engines' stages write their rows through it, so the
+Python and numpy (no YADE, no LAMMPS): both engines' stages write their rows through it, so the
 series' columns, units and signs (docs/data-contract.md) are defined once.
 """
 import math
+
+import numpy as np
 
 COLUMNS = ["t", "strain", "gammadot", "U_top", "U_bottom", "gap", "A_xx", "A_xy", "n_contacts",
            "sigma_xy", "p", "mu", "sigma_xy_bulk", "p_bulk", "phi", "Z", "inertial_number"]
@@ -73,6 +75,20 @@ def pressure_guard_tolerance(guards, W_over_d):
     wider than about 150 d keeps the configured 0.2.
     """
     return max(guards["pressure_tolerance"], guards["pressure_noise_z"] / W_over_d ** 0.5)
+
+
+def state_problem(row, w, ys, d, at):
+    """The blow-up guards on one sample: NaN in the row's strain, stresses, gap or the top wall's
+    forces, or in the disks' heights ``ys``; a disk outside the walls. ``at`` names the sample
+    ("iteration 123", "step 123"). Returns the guard's message, or None."""
+    vals = [row[k] for k in ("strain", "sigma_xy", "p", "gap")] + [w["fx_top"], w["fy_top"]]
+    if not all(math.isfinite(v) for v in vals) or not np.all(np.isfinite(ys)):
+        return f"NaN in positions or forces at {at} (t = {row['t']:.4f})"
+    out = np.nonzero((ys < w["y_bot"]) | (ys > w["y_top"]))[0]
+    if len(out):
+        return (f"disk {int(out[0])} left the cell at {at} "
+                f"(y = {ys[out[0]] / d:.3f} d, walls at {w['y_bot'] / d:.3f} d and {w['y_top'] / d:.3f} d)")
+    return None
 
 
 def pressure_window_problem(st, guards, der, steps, p_row):

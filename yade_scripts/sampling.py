@@ -5,15 +5,13 @@ The sampler runs inside a step: the positions are those of the end of the step w
 O.iter and O.time are not yet incremented (`_sample` counts it so). A mixin of stages.Stage.
 """
 import builtins
-import math
 import time
 
-import numpy as np
 from yade.wrapper import Omega
 
 import engines
 import measure
-from rows import PACK_COLUMNS, fmt, pressure_window_problem, wall_row
+from rows import PACK_COLUMNS, fmt, pressure_window_problem, state_problem, wall_row
 from stageerrors import GuardError
 
 O = Omega()
@@ -111,15 +109,11 @@ class Sampling:
     def _guards(self, row, ys, w):
         st, g, der = self.st, self.scene["guards"], self.der
         d = der["d"]
-        vals = [row[k] for k in ("strain", "sigma_xy", "p", "gap")] + [w["fx_top"], w["fy_top"]]
         if ys is None:
             ys = self.bulk.ys()
-        if not all(math.isfinite(v) for v in vals) or not np.all(np.isfinite(ys)):
-            raise GuardError(f"NaN in positions or forces at iteration {self._it} (t = {row['t']:.4f})")
-        out = np.nonzero((ys < w["y_bot"]) | (ys > w["y_top"]))[0]
-        if len(out):
-            raise GuardError(f"disk {int(out[0])} left the cell at iteration {self._it} "
-                             f"(y = {ys[out[0]] / d:.3f} d, walls at {w['y_bot'] / d:.3f} d and {w['y_top'] / d:.3f} d)")
+        why = state_problem(row, w, ys, d, f"iteration {self._it}")
+        if why is not None:
+            raise GuardError(why)
         smax = self.scene["material"]["size_ratio_max"]
         if measure.max_overlap_d(d, smax) > g["max_overlap_d"]:
             ov = measure.exact_max_overlap_d(d)
