@@ -19,7 +19,7 @@ A release folder ``data/<name>/`` holds, per case ``cases/<label>/``:
 
 and ``config.yaml`` (the campaign's config file as run; ``config-<k>.yaml``,
 k = 1, 2, ..., when it ran with several, in their order) and ``manifest.yaml``
-(the config, merged as Snakemake merges it, the commit of the code, YADE's version, the date, a sha256 and a size
+(the data license, CC-BY-4.0, data/LICENSE; the config, merged as Snakemake merges it, the commit of the code, YADE's version, the date, a sha256 and a size
 per file, the commands that regenerate the DEM and the release). Nothing in a
 release is edited by hand: ``verify`` reports a file whose checksum differs, and
 ``restore_case`` and ``released_cases`` (what the workflow's release rules use)
@@ -196,6 +196,9 @@ def _release_case(case_dir: Path, out: Path, with_state: bool) -> dict:
             "cpu_time_s": sum(c.get("cpu_time_s", 0.0) for c in costs.values())}
 
 
+DATA_LICENSE = "CC-BY-4.0"     # the data releases' license (data/LICENSE; the code's is GPL-3.0-or-later, LICENSE)
+
+
 def make_release(case_dirs, out, config, command: str, with_states: bool = False, repo=None,
                  published=()) -> Path:
     """Write a data release of finished DEM cases into ``out`` (a new or empty folder).
@@ -269,6 +272,7 @@ def make_release(case_dirs, out, config, command: str, with_states: bool = False
                        for label, c in cases.items() for p in c["protocols"])
     manifest = {
         "release": out.name,
+        "license": DATA_LICENSE,
         "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
         "code_commit": git_output("rev-parse", "HEAD", cwd=repo),
         # tracked files differing from the commit, but for this release's own folder (remade: deleted first)
@@ -425,6 +429,6 @@ def case_files(release, label) -> list:
     return sorted(str(p) for p in (Path(release) / CASES_DIR / label).rglob("*") if p.is_file())
 
 
-__all__ = ["DEMInputError", "MANIFEST", "sha256", "git_output", "write_csv_gz", "case_protocols", "make_release",
+__all__ = ["DEMInputError", "MANIFEST", "DATA_LICENSE", "sha256", "git_output", "write_csv_gz", "case_protocols", "make_release",
            "read_manifest", "checksum_problems", "require_intact", "restore_case", "verify", "released_cases",
            "release_bytes", "case_files"]

@@ -93,6 +93,22 @@ def test_committed_releases_fit_the_size_budget():
     assert release.release_bytes(ROOT / "data") <= 20e6
 
 
+def test_code_and_data_licenses_are_named_in_the_citation_and_every_release():
+    """GPL-3.0-or-later for the code (LICENSE), CC-BY-4.0 for the releases (data/LICENSE), each named where it is read.
+
+    CI validates CITATION.cff against the Citation File Format schema (``cffconvert --validate``);
+    this checks that the licenses it names are the files' and every committed release's.
+    """
+    assert (ROOT / "LICENSE").read_text().lstrip().startswith("GNU GENERAL PUBLIC LICENSE\n                       Version 3")
+    assert (ROOT / "data" / "LICENSE").read_text().startswith("Creative Commons Attribution 4.0 International")
+    citation = yaml.safe_load((ROOT / "CITATION.cff").read_text())
+    assert citation["license"] == "GPL-3.0-or-later"
+    assert [r["license"] for r in citation["references"] if r["type"] == "data"] == [release.DATA_LICENSE]
+    assert release.DATA_LICENSE == "CC-BY-4.0"
+    unlicensed = [p.name for p in COMMITTED if release.read_manifest(p).get("license") != release.DATA_LICENSE]
+    assert unlicensed == []
+
+
 def test_config_files_merge_as_snakemake_merges_them():
     """A later --configfile's mapping updates the earlier one's key by key; other values are replaced."""
     preset = {"seeds": [1, 2], "accuracy": {"dem_study": False, "subset": "default"}, "campaign": "quick"}
@@ -148,6 +164,7 @@ def test_release_manifest_names_provenance_and_every_file(released):
     labels = [f"p100000_I0.01_s{seed}" for seed in SEEDS]
     assert sorted(manifest["cases"]) == labels
     assert manifest["config"] == yaml.safe_load(config.read_text())
+    assert manifest["license"] == "CC-BY-4.0"
     assert manifest["yade_version"] == "2023.02a" and len(manifest["code_commit"]) == len(manifest["dem_code_commit"]) == 40
     assert "python -m dem_contract release --cases" in manifest["regenerate"]["release"]
     assert f"results_dir=<results_dir> <results_dir>/dem/{labels[0]}/heaviside.csv" in manifest["regenerate"]["dem"]
