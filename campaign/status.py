@@ -4,7 +4,9 @@ Read only, from what the DEM stages write (nothing is locked, nothing written):
 
 - ``<results_dir>/dem/<case>/<stage>.json``, the sidecar of a finished stage: its ``cpu_time_s``
   and ``wall_time_s``;
-- ``<results_dir>/logs/dem/<case>/<stage>.log``, the stage's log, whose last progress line
+- ``<case_dir>/.partial/<stage>.log``, the stage's own copy of its log (yade_scripts/stagelog.py:
+  a second name of the log file, kept however the stage was started), else
+  ``<results_dir>/logs/dem/<case>/<stage>.log``, the log Snakemake names: the last progress line
   ``[stage] strain ... | NN.N% | t ... | ... particle-steps/s | ETA N s`` gives a running stage's
   progress and ETA;
 - ``<case_dir>/.partial/<stage>.lock``, the stage lock (yade_scripts/stagelock.py): the stage runs
@@ -133,7 +135,8 @@ def stage_status(results_dir, label: str, scene: dict, stage: str, restored: boo
                            float(side["cpu_time_s"]), float(side.get("wall_time_s", side["cpu_time_s"])), 1.0)
     if restored:
         return StageStatus(label, stage, "restored", projected, fraction=0.0)
-    lines = log_tail(Path(results_dir) / "logs" / "dem" / label / f"{stage}.log")
+    lines = (log_tail(case_dir / ".partial" / f"{stage}.log")            # however the stage was started
+             or log_tail(Path(results_dir) / "logs" / "dem" / label / f"{stage}.log"))
     checkpoint = read_json(case_dir / ".partial" / stage / "resume.json")
     owner = live_owner(case_dir, stage)
     progress = last_progress(lines) or {}

@@ -114,6 +114,17 @@ def test_each_stage_is_done_stopped_running_or_waiting(half_done):
     assert [s.case_state(stages) for stages in s.cases().values()] == ["done", "stopped", "running"]
 
 
+def test_a_stage_started_outside_the_workflow_shows_the_progress_of_its_own_log(half_done):
+    """A stage run by hand with its own --log keeps a copy in .partial/<stage>.log: the status reads it there."""
+    results, s3 = half_done["results"], half_done["labels"][2]
+    (results / "logs" / "dem" / s3 / "pack.log").unlink()          # the workflow's log path: not written
+    own = results / "dem" / s3 / ".partial" / "pack.log"
+    own.write_text("[pack] phase compress |  10.0% | t 200.00 | 8.1e+05 particle-steps/s | ETA 250 s (at most)\n")
+    pack = next(st for st in status.campaign_status(half_done["config"], cores=2).stages
+                if (st.case, st.stage) == (s3, "pack"))
+    assert pack.state == "running" and pack.fraction > 0.0 and pack.eta_s == 250
+
+
 def test_a_killed_stage_resumes_from_its_checkpoint_not_from_its_last_progress_line(half_done):
     s = status.campaign_status(half_done["config"])
     stopped = next(st for st in s.stages if st.state == "stopped")
