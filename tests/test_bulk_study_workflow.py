@@ -74,18 +74,25 @@ def test_the_shipped_overlay_plans_every_cell_and_seed_and_nothing_of_the_campai
     assert not any(rule.startswith("dem_") for rule in c), c
 
 
-def test_the_paper_physics_overlay_plans_the_wide_and_the_narrow_cell_at_kappa_1e5(workflow_dir):
-    """config/bulk_validation_paper.yaml over config/bulk.yaml: 2 cells x 2 seeds, pre-shear and one
-    Heaviside reversal each, at the bulk preset's kappa and I, and nothing of the bulk campaign."""
-    overlay = yaml.safe_load((ROOT / "config" / "bulk_validation_paper.yaml").read_text())["accuracy"]["bulk_vs_walls"]
+@pytest.mark.parametrize("overlay, kappa, inertial_number, seeds", [
+    ("bulk_validation_reconciled.yaml", 7.0e2, 3.0e-4, 4),   # the bulk preset's own physics
+    ("bulk_validation_paper.yaml", 1.0e5, 1.0e-3, 2),        # the earlier reading, its guards as it ran
+])
+def test_a_validation_overlay_plans_the_wide_and_the_narrow_cell_at_its_physics(workflow_dir, overlay, kappa,
+                                                                              inertial_number, seeds):
+    """A bulk-vs-walls overlay over config/bulk.yaml: 2 cells x its seeds, pre-shear and one Heaviside reversal
+    each, at the overlay's kappa and I (the reconciled one the bulk preset's own), and nothing of the bulk campaign."""
+    study = yaml.safe_load((ROOT / "config" / overlay).read_text())["accuracy"]["bulk_vs_walls"]
     bulk = yaml.safe_load((ROOT / "config" / "bulk.yaml").read_text())
-    assert overlay["kappa"] == bulk["material"]["kappa"] == 1.0e5
-    assert overlay["inertial_number"] == bulk["loading"]["inertial_numbers"][0] == 1.0e-3
-    result = helpers.dry_run("bulk_vs_walls", "--configfile", "config/bulk.yaml", "config/bulk_validation_paper.yaml",
+    assert (study["kappa"], study["inertial_number"], len(study["seeds"])) == (kappa, inertial_number, seeds)
+    reconciled = yaml.safe_load((ROOT / "config" / "bulk_validation_reconciled.yaml").read_text())
+    assert (bulk["material"]["kappa"], bulk["loading"]["inertial_numbers"]) == (
+        reconciled["accuracy"]["bulk_vs_walls"]["kappa"], [reconciled["accuracy"]["bulk_vs_walls"]["inertial_number"]])
+    result = helpers.dry_run("bulk_vs_walls", "--configfile", "config/bulk.yaml", f"config/{overlay}",
                              cwd=workflow_dir)
     assert result.returncode == 0, result.stderr[-3000:]
     c = counts(result.stdout)
-    assert c.get("bulk_study_pack") == c.get("bulk_study_heaviside") == 4 and c.get("bulk_vs_walls") == 1
+    assert c.get("bulk_study_pack") == c.get("bulk_study_heaviside") == 2 * seeds and c.get("bulk_vs_walls") == 1
     assert not any(rule.startswith("dem_") for rule in c), c
 
 

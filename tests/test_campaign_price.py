@@ -75,7 +75,7 @@ def test_a_dem_study_the_config_runs_is_priced_on_a_line_of_its_own(tmp_path):
     r = preflight_check(write(tmp_path, paper))
     assert r.returncode == 0, r.stderr
     lines = r.stdout.splitlines()
-    assert lines[1].startswith("price: campaign paper: 4 DEM cases, 34 core-hours")
+    assert lines[1].startswith("price: campaign paper: 4 DEM cases, 9.3 core-hours")
     assert "the cell of 5010 disks, 21 times slower per step than the quick preset's 626" in lines[2]
     assert lines[3].startswith("price: and the DEM resolution study (accuracy.dem_study): 19 DEM cases, 1.4 "
                                "core-hours, about ")

@@ -307,25 +307,42 @@ def test_release_of_what_is_not_a_finished_case_is_refused_and_writes_nothing(tm
 
 
 PAPER_VALIDATION = ROOT / "data" / "bulk-validation-paper"
+RECONCILED_VALIDATION = ROOT / "data" / "bulk-validation-reconciled"
+VALIDATIONS = [  # release, overlay of config/bulk.yaml, reference cell, seeds per cell, the quantities the narrow cell fails
+    (PAPER_VALIDATION, "config/bulk_validation_paper.yaml", "W4H-H24", 2, ""),
+    (RECONCILED_VALIDATION, "config/bulk_validation_reconciled.yaml", "W4H-H37", 4, "Z"),
+]
 
 
 @pytest.mark.slow
-@pytest.mark.skipif(not PAPER_VALIDATION.is_dir(), reason="the paper-physics validation release is not in data/")
-def test_the_released_validation_cells_decide_the_narrow_cell_without_yade(workflow_dir, tmp_path):
-    """config/bulk_validation_paper.yaml with its release: the four cells are restored, not run (no DEM rule
-    in the plan), and the study's own tolerance rule finds the narrow cell H = 37d, W = 18.5d the W = 4H,
-    H = 24d wall cell's material at the paper's physics (docs/findings.md, "The narrow cell at the paper's physics")."""
-    args = ["bulk_vs_walls", "--configfile", "config/bulk.yaml", "config/bulk_validation_paper.yaml",
-            "--config", f"results_dir={tmp_path / 'results'}", "allow_outside_tree=True", f"release={PAPER_VALIDATION}"]
+@pytest.mark.parametrize("release_dir, overlay, reference, seeds, failing", VALIDATIONS,
+                         ids=[v[0].name for v in VALIDATIONS])
+def test_the_released_validation_cells_decide_the_narrow_cell_without_yade(workflow_dir, tmp_path, release_dir,
+                                                                           overlay, reference, seeds, failing):
+    """A bulk-vs-walls overlay with its release: every cell is restored, not run (no DEM rule in the plan), and
+    the study's own tolerance rule decides the narrow cell H = 37d, W = 18.5d against the W = 4H wall cell:
+    it matches at kappa 1e5, I 1e-3 (H = 24d reference, 2 seeds; docs/findings.md, "The narrow cell at the
+    paper's physics"); at the reconciled physics (kappa 700, I 3e-4; the paper's own cell, H = 37d, 4 seeds)
+    it matches in mu, |A|, theta_A and phi and fails on Z (docs/findings.md, "The reconciled physics"), the
+    tables recomputed equal to the ones the run published, byte for byte."""
+    if not release_dir.is_dir():
+        pytest.skip(f"{release_dir.name} is not in data/")
+    results = tmp_path / "results"
+    args = ["bulk_vs_walls", "--configfile", "config/bulk.yaml", overlay,
+            "--config", f"results_dir={results}", "allow_outside_tree=True", f"release={release_dir}"]
     plan = dry_run(*args, cwd=workflow_dir)
     assert plan.returncode == 0, plan.stderr[-3000:]
     c = counts(plan.stdout)
-    assert c.get("release_bulk_case") == 4 and not any(r.startswith("bulk_study_") and r != "bulk_study_cases"
-                                                       and r != "bulk_study_dem" for r in c), c
+    assert c.get("release_bulk_case") == 2 * seeds and not any(
+        r.startswith("bulk_study_") and r not in ("bulk_study_cases", "bulk_study_dem") for r in c), c
     run = snakemake("-j1", *args, cwd=workflow_dir, timeout=600)
     assert run.returncode == 0, run.stderr[-3000:]
-    table = pd.read_csv(tmp_path / "results" / "accuracy" / "bulk_vs_walls.csv").set_index("cell")
-    assert bool(table.loc["narrow-H37-W18", "match"]) and table.loc["W4H-H24", "seeds"] == 2
+    table = pd.read_csv(results / "accuracy" / "bulk_vs_walls.csv").set_index("cell")
+    assert table.loc[reference, "seeds"] == seeds
+    assert bool(table.loc["narrow-H37-W18", "match"]) == (not failing)
+    assert str(table.loc["narrow-H37-W18", "failing"]).replace("nan", "") == failing
+    for published in sorted((release_dir / "published").glob("*")):
+        assert filecmp.cmp(results / "accuracy" / published.name, published, shallow=False), published.name
 
 
 DECIDE = ROOT / "data" / "bulk-decide"
