@@ -17,7 +17,7 @@ import pandas as pd
 
 from model import params_from_dict
 
-from . import curves_fit, route1, route2
+from . import backsolve_fit, curves_fit, route2
 
 BLOCKS = ("friction_eq2", "friction_quadratic", "model1", "model2")
 
@@ -85,8 +85,8 @@ def run(cases, samples, steady_fn, replays, full, base_doc, settings, n_boot=20,
         smp = resample(samples, drawn)
         steady = steady_fn(drawn)
         try:
-            r1 = route1.run_route1(smp, steady, settings["backsolve"], settings["steady_weight"],
-                                   settings["xc_margin"], model1_start=full["route1"]["model1"].values)
+            r1 = backsolve_fit.fit_blocks(smp, steady, settings["backsolve"], settings["steady_weight"],
+                                          settings["xc_margin"], model1_start=full["route1"]["model1"].values)
         except ValueError as exc:
             log(f"bootstrap replicate {k}: route 1 failed ({exc}); replicate skipped")
             continue

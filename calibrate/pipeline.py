@@ -13,7 +13,7 @@ import pandas as pd
 from dem_contract import fabric_angle_deg, fabric_norm
 from model import default_params, params_from_dict, steady_state
 
-from . import (backsolve, bootstrap, curves_fit, dem_replays, fits, freeform, identifiability, io, profiles, route1,
+from . import (backsolve, backsolve_fit, bootstrap, curves_fit, dem_replays, fits, freeform, identifiability, io, profiles,
                route2, shear_stability, smoothing, tables)
 
 BLOCKS = ("friction_eq2", "friction_quadratic", "model1", "model2")
@@ -125,8 +125,8 @@ def smooth(cases, settings: Settings):
 
 
 def fit_friction(samples, steady, settings: Settings) -> dict:
-    """Step 3, fit friction: Eq. 2 and the quadratic law to mu(X) (``route1.fit_friction``)."""
-    return route1.fit_friction(samples, steady, settings.backsolve, settings.steady_weight)
+    """Step 3, fit friction: Eq. 2 and the quadratic law to mu(X) (``backsolve_fit.fit_friction``)."""
+    return backsolve_fit.fit_friction(samples, steady, settings.backsolve, settings.steady_weight)
 
 
 def fit_route1(samples, steady, friction: dict, settings: Settings):
@@ -135,12 +135,12 @@ def fit_route1(samples, steady, friction: dict, settings: Settings):
     Returns
     -------
     r1 : dict
-        ``friction`` merged with ``route1.fit_coefficients`` (the layout of ``route1.run_route1``).
+        ``friction`` merged with ``backsolve_fit.fit_coefficients`` (the layout of ``backsolve_fit.fit_blocks``).
     doc1 : dict
         A full parameter document holding every route-1 block (range-checked).
     """
     r1 = dict(friction)
-    r1.update(route1.fit_coefficients(samples, steady, settings.backsolve, settings.steady_weight,
+    r1.update(backsolve_fit.fit_coefficients(samples, steady, settings.backsolve, settings.steady_weight,
                                       settings.xc_margin))
     doc1 = default_params().to_dict()
     doc1.pop("provenance", None)
@@ -564,7 +564,7 @@ def write_figures(out: Path, samples, replays, btab, doc1, doc2, final, default_
                   log, free=None, profile_tables=None) -> None:
     """Step 10: Fig. 2a, 2b, 3a, 3b, the default routes' curves against the DEM's and the profiles."""
     from . import figures   # matplotlib only where a figure is drawn: the pre-flight's options check imports this package
-    X, mu = route1.friction_data(samples, settings.backsolve)
+    X, mu = backsolve_fit.friction_data(samples, settings.backsolve)
     figures.fig2a(samples, out / "fig2a_stress_vs_Axy.png")
     figures.fig2b(X, mu, doc1["friction_eq2"], doc1["friction_quadratic"], out / "fig2b_mu_vs_X.png")
     m1 = {"back-solve": doc1["model1"], "curves": doc2["model1"]}

@@ -329,7 +329,7 @@ def run(case_dirs, params_path, protocols, out_yaml, max_evals: int = Route2Sett
     s2 = dataclasses.replace(settings.route2, max_evals=int(max_evals))
     cases = pipeline.read_inputs(case_dirs, settings)
     samples, steady = pipeline.smooth(cases, settings)
-    sigma_mu = pipeline.route1.mu_noise(samples)
+    sigma_mu = pipeline.backsolve_fit.mu_noise(samples)
     replays = dem_replays.prepare(cases, samples, settings.backsolve)
     base = load_params(params_path)
     doc = base.to_dict()
