@@ -3,7 +3,7 @@
 Stages (one module each): ``io`` (read the DEM runs: the contract's checks from
 ``dem_contract``, plus the calibration's own: pressure, reversal, steady state),
 ``smoothing`` (Savitzky-Golay in strain), ``backsolve`` (Eq. 4, conditioning-aware),
-``fits`` (least squares of the laws), ``backsolve_fit`` (the back-solve route), ``route2``
+``fits`` (least squares of the laws), ``backsolve_fit`` (the back-solve route), ``curves_fit``
 (fit the integrated model to the DEM curves), ``bootstrap`` (over seeds),
 ``tables`` and ``figures`` (outputs), ``synthetic`` (model-made test cases:
 ``dem_contract.synthetic`` with the calibration's defaults).

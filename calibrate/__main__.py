@@ -12,7 +12,7 @@ import sys
 
 from dem_contract.folders import new_folders, remove_new
 
-from . import backsolve, freeform, io, profiles, route2, smoothing
+from . import backsolve, curves_integration, freeform, io, profiles, smoothing
 from .pipeline import Settings, run
 
 PROTOCOL_NAME = re.compile(r"^[a-z][a-z0-9_]*$")
@@ -27,7 +27,7 @@ def protocol_name(text: str) -> str:
 
 
 def parser() -> argparse.ArgumentParser:
-    sd, bd, rd = smoothing.SmoothingSettings(), backsolve.BacksolveSettings(), route2.Route2Settings()
+    sd, bd, rd = smoothing.SmoothingSettings(), backsolve.BacksolveSettings(), curves_integration.CurvesSettings()
     p = argparse.ArgumentParser(prog="python -m calibrate", description=__doc__.splitlines()[0])
     p.add_argument("--dem", nargs="+", required=True, metavar="CASE_DIR",
                    help="case directories results/dem/<case>/ (seeds of one pressure and I form the ensemble)")
@@ -49,7 +49,7 @@ def parser() -> argparse.ArgumentParser:
     g.add_argument("--route2-evals", type=int, default=rd.max_evals, help="model evaluations per route-2 fit")
     g.add_argument("--route2-rtol", type=float, default=rd.rtol)
     g.add_argument("--route2-method", default=rd.method)
-    g.add_argument("--integrator", choices=route2.INTEGRATORS, default=rd.integrator,
+    g.add_argument("--integrator", choices=curves_integration.INTEGRATORS, default=rd.integrator,
                    help="route 2 and bootstrap: 'batched' integrates all runs and Jacobian points of a step in one "
                         "model.batched.simulate_batch call; 'loop' calls model.simulate per run")
     g.add_argument("--mu-weight", type=float, default=rd.mu_weight)
@@ -126,7 +126,7 @@ def main(argv=None) -> int:
                                                   fine_span=a.sg_fine_span, order=a.sg_order),
             backsolve=backsolve.BacksolveSettings(rate_min=a.rate_min, skip=a.skip, bin_width=a.bin_width,
                                                   min_samples=a.min_bin_samples, cond_max=a.cond_max),
-            route2=route2.Route2Settings(max_evals=a.route2_evals, rtol=a.route2_rtol, method=a.route2_method,
+            route2=curves_integration.CurvesSettings(max_evals=a.route2_evals, rtol=a.route2_rtol, method=a.route2_method,
                                          integrator=a.integrator,
                                          mu_weight=a.mu_weight, steady_weight=a.steady_weight),
             steady_weight=a.steady_weight, n_boot=a.bootstrap, boot_evals=a.bootstrap_evals, seed=a.seed,

@@ -17,7 +17,7 @@ import pandas as pd
 
 from model import params_from_dict
 
-from . import backsolve_fit, curves_fit, route2
+from . import backsolve_fit, curves_fit, integration_batcher
 
 BLOCKS = ("friction_eq2", "friction_quadratic", "model1", "model2")
 
@@ -92,14 +92,14 @@ def run(cases, samples, steady_fn, replays, full, base_doc, settings, n_boot=20,
             continue
         prepared.append((k, smp, r1, drawn, held, steady))
 
-    def replicate(k, smp, r1, drawn, held, steady):
-        doc1, doc2, fitted = _refit(k, smp, r1, drawn, replays, full, base_doc, steady, settings, s2, edges)
+    def replicate(batcher, k, smp, r1, drawn, held, steady):
+        doc1, doc2, fitted = _refit(k, smp, r1, drawn, replays, full, base_doc, steady, settings, s2, edges, batcher)
         return fitted, _heldout_scores(k, doc1, doc2, [r for r in replays if r.case in held], r1["sigma_mu"],
-                                       settings["route2"])
+                                       settings["route2"], batcher)
 
-    jobs = [lambda p=p: replicate(*p) for p in prepared]
-    # batched: the replicates' route-2 fits and scores advance together, their integrations in one batch per round
-    done = route2.Lockstep().run(jobs) if settings["route2"].integrator == "batched" else [j() for j in jobs]
+    jobs = [lambda batcher, p=p: replicate(batcher, *p) for p in prepared]
+    # batched: the replicates' curves fits and scores advance together, their integrations in one batch per round
+    done = integration_batcher.run_jobs(jobs, settings["route2"])
     for (k, _, _, drawn, held, _), (fitted, scores) in zip(prepared, done):
         rows += fitted
         held_rows += scores
@@ -109,7 +109,7 @@ def run(cases, samples, steady_fn, replays, full, base_doc, settings, n_boot=20,
     return values, heldout
 
 
-def _refit(k, smp, r1, drawn, replays, full, base_doc, steady, settings, s2, edges):
+def _refit(k, smp, r1, drawn, replays, full, base_doc, steady, settings, s2, edges, batcher):
     """One replicate's refits: route-1 rows, re-solved bins, route 2 warm-started from the full fit.
 
     Returns the replicate's route-1 and route-2 parameter documents and its
@@ -126,7 +126,8 @@ def _refit(k, smp, r1, drawn, replays, full, base_doc, steady, settings, s2, edg
     reps = [r for name in drawn for r in replays if r.case == name]
     doc2 = dict(doc1)
     for model in ("model1", "model2"):
-        f = curves_fit.fit(reps, doc1, model, full["route2"][model].values, steady, r1["sigma_mu"], s2)
+        f = curves_fit.fit(reps, doc1, model, full["route2"][model].values, steady, r1["sigma_mu"], s2,
+                           batcher=batcher)
         doc2[model] = f.values
         rows += [(k, "curves", model, name, v) for name, v in f.values.items()]
     return doc1, doc2, rows
@@ -136,7 +137,7 @@ def _refit(k, smp, r1, drawn, replays, full, base_doc, steady, settings, s2, edg
 HELDOUT_COLUMNS = ["replicate", "route", "model", "n_heldout_runs"]
 
 
-def _heldout_scores(k, doc1, doc2, held_reps, sigma_mu, settings_route2) -> list:
+def _heldout_scores(k, doc1, doc2, held_reps, sigma_mu, settings_route2, batcher) -> list:
     """Scores of one replicate's routes on its held-out runs (none if every seed was drawn)."""
     out = []
     if not held_reps:
@@ -145,7 +146,7 @@ def _heldout_scores(k, doc1, doc2, held_reps, sigma_mu, settings_route2) -> list
             for model in ("model1", "model2")]
     prms = {route: params_from_dict(doc, source=f"bootstrap {k} {route}") for route, doc, _ in keys}
     scores = curves_fit.score_many([(prms[route], model) for route, _, model in keys], held_reps, settings_route2,
-                               sigma_mu)   # the four (route, model) pairs in one batch
+                                   sigma_mu, batcher)   # the four (route, model) pairs in one batch
     for (route, _, model), sc in zip(keys, scores):
         out.append({**dict(zip(HELDOUT_COLUMNS, (k, route, model, len(held_reps)))), **sc})
     return out

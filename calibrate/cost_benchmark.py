@@ -49,7 +49,7 @@ import pandas as pd
 
 from dem_contract.labels import parse_case_label
 
-from . import io, pipeline, profiles, route2, tables
+from . import curves_integration, io, pipeline, profiles, tables
 
 SYNTHETIC_M1 = dict(a1=-0.85, b1=0.0, c1=-3000.0, a2=-5.0, b2=100.0, c2=2000.0, X_c=0.0827)
 QUICK_SHAPE = dict(inertial_numbers=(2e-3, 5e-3), seeds=(1, 2, 3), preshear_strain=1.5, reversal_strain=0.6,
@@ -128,7 +128,7 @@ def run(case_dirs, data: str, out: Path, protocol_sets: dict, settings: pipeline
         with_profiles = replace(settings, protocols=tuple(protocols), figures=False)
         s = replace(with_profiles, profile=replace(settings.profile, n_points=0))   # the integrators compared alone
         times, tabs = {}, {}
-        for integrator in route2.INTEGRATORS[::-1]:   # loop first, then batched
+        for integrator in curves_integration.INTEGRATORS[::-1]:   # loop first, then batched
             o = work / name / integrator
             times[integrator] = _timed(dirs, o, replace(s, route2=replace(s.route2, integrator=integrator)))
             tabs[integrator] = pd.read_csv(o / "params_table.csv")

@@ -7,10 +7,10 @@ At the route-2 optimum :math:`\hat\theta` of a model block, the columns of
 .. math:: S_{ij} = \frac{\partial r_i}{\partial \theta_j}\, s_j, \qquad
           s_j = |\hat\theta_j| \ \text{(or 1 where } \hat\theta_j = 0),
 
-are the changes of route 2's normalised residuals :math:`r` (``route2``) per
+are the changes of the curves fit's normalised residuals :math:`r` (``curves_fit``) per
 relative change of each parameter (forward differences of relative step
 ``STEP``, a backward one where the forward point cannot be integrated; all
-points in one ``route2.curves`` batch). Its singular values
+points in one ``curves_integration.curves`` batch). Its singular values
 :math:`\sigma_1 \ge \dots \ge \sigma_p` give the curvature of the objective
 along the right singular vectors :math:`v_k`:
 :math:`C(\hat\theta + \epsilon\, v_k) - C(\hat\theta) \approx \tfrac12 \epsilon^2 \sigma_k^2`.
@@ -41,7 +41,7 @@ import pandas as pd
 
 from model import params_from_dict
 
-from . import curves_fit, fits, route2
+from . import curves_fit, curves_integration, fits
 
 STEP = 1e-3
 REL_THRESHOLD = 1e-3
@@ -50,7 +50,7 @@ KEYS = {"model1": fits.M1_KEYS, "model2": fits.M2_KEYS}
 
 
 def sensitivity(replays, base_doc: dict, model: str, fitted: dict, sigma_mu: float,
-                settings: route2.Route2Settings) -> tuple:
+                settings: curves_integration.CurvesSettings) -> tuple:
     """The scaled sensitivity matrix :math:`S` of the module Notes and the column scales.
 
     Returns
@@ -77,7 +77,7 @@ def sensitivity(replays, base_doc: dict, model: str, fitted: dict, sigma_mu: flo
             items.append((params_from_dict({**base_doc, model: dict(zip(keys, x.tolist()))}), model, FRICTION[model]))
         except ValueError:
             items.append(None)
-    got = route2.curves([it for it in items if it is not None], replays, settings)
+    got = curves_integration.curves([it for it in items if it is not None], replays, settings)
     it = iter(got)
     vecs = []
     for item in items:

@@ -14,7 +14,7 @@ from dem_contract import fabric_angle_deg, fabric_norm
 from model import default_params, params_from_dict, steady_state
 
 from . import (backsolve, backsolve_fit, bootstrap, curves_fit, dem_replays, fits, freeform, identifiability, io, profiles,
-               route2, shear_stability, smoothing, tables)
+               curves_integration, shear_stability, smoothing, tables)
 
 BLOCKS = ("friction_eq2", "friction_quadratic", "model1", "model2")
 #: Fewest seeds per ensemble for bootstrap intervals worth the name; below it the calibration warns.
@@ -27,7 +27,7 @@ class Settings:
     protocols: tuple = io.REVERSAL_PROTOCOLS
     smoothing: smoothing.SmoothingSettings = field(default_factory=smoothing.SmoothingSettings)
     backsolve: backsolve.BacksolveSettings = field(default_factory=backsolve.BacksolveSettings)
-    route2: route2.Route2Settings = field(default_factory=route2.Route2Settings)
+    route2: curves_integration.CurvesSettings = field(default_factory=curves_integration.CurvesSettings)
     steady_weight: float = 1.0
     xc_margin: float = 2e-3
     n_boot: int = 20
@@ -577,7 +577,7 @@ def write_figures(out: Path, samples, replays, btab, doc1, doc2, final, default_
         fr = "eq2" if model == "model1" else "quadratic"
         try:
             preds[f"{model} ({default_route[model]})"] = {
-                r.label: route2.replay_run(prm, r, model, fr, settings.route2) for r in replays}
+                r.label: curves_integration.replay_run(prm, r, model, fr, settings.route2) for r in replays}
         except (ValueError, RuntimeError) as exc:
             log(f"figure: {model} cannot be integrated ({exc})")
     figures.fig_curves(replays, preds, out / "fig_curves_model_vs_dem.png")

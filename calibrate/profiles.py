@@ -8,14 +8,14 @@ the profile is
 .. math:: C_p(g) = \min_{\theta_{-j}} C(\theta_j = g, \theta_{-j}),
           \qquad C = \tfrac12 \lVert r \rVert^2,
 
-with :math:`r` route 2's normalised residuals (``route2``, module Notes).
+with :math:`r` the curves fit's normalised residuals (``curves_fit``, module Notes).
 Each grid point is one ``curves_fit.fit`` with ``fixed={name: g}`` under a budget
 of ``ProfileSettings.evals`` model evaluations, warm-started by continuation:
 the grid is walked outwards from the estimate in two chains (below, above),
 each point started from its neighbour's re-fit (the full fit for the first).
 A point whose every trial meets the pole or diverges is kept as failed
 (objective NaN). The chains of every profiled parameter of a model run
-together under ``route2.Lockstep``: their integrations go into one
+together under ``integration_batcher.IntegrationBatcher``: their integrations go into one
 ``model.batched.simulate_batch`` call per round.
 
 The 95 % profile interval is the set of :math:`g` with
@@ -50,7 +50,7 @@ from scipy import stats
 
 from model import params_from_dict
 
-from . import curves_fit, fits, io, route2
+from . import curves_fit, curves_integration, fits, integration_batcher, io
 
 #: The parameters profiled per model block.
 PROFILED = {"model1": ("c1", "c2", "X_c"), "model2": ("c1", "c2", "c3")}
@@ -112,7 +112,7 @@ def threshold(data_residuals, cost_min: float, n_free: int, level: float = 0.95)
 
 
 def profile(replays, base_doc: dict, model: str, fitted: dict, steady: dict, sigma_mu: float,
-            r2settings: route2.Route2Settings, settings: ProfileSettings = ProfileSettings(), x_lower=None,
+            r2settings: curves_integration.CurvesSettings, settings: ProfileSettings = ProfileSettings(), x_lower=None,
             names=None, widths=None) -> pd.DataFrame:
     """Profiles of ``names`` (default ``PROFILED[model]``) about the route-2 fit ``fitted``.
 
@@ -151,19 +151,19 @@ def profile(replays, base_doc: dict, model: str, fitted: dict, steady: dict, sig
         g = np.sort(grid(model, name, fitted[name], xl, settings, (widths or {}).get(name, 0.0)))
         chains += [(name, [float(x) for x in g[g < fitted[name]][::-1]]), (name, [float(x) for x in g[g >= fitted[name]]])]
 
-    def walk(name, values):
+    def walk(batcher, name, values):
         """One chain of re-fits outwards from the optimum, each started from the last that could be integrated."""
         start, out = dict(fitted), []
         for g in values:
             f = curves_fit.fit(replays, base_doc, model, {**start, name: g}, steady, sigma_mu, s, x_lower=xl,
-                           fixed={name: g})
+                               fixed={name: g}, batcher=batcher)
             out.append((g, f))
             if f.success:
                 start = dict(f.values)
         return out
 
-    jobs = [lambda c=c: walk(*c) for c in chains if c[1]]
-    done = route2.Lockstep().run(jobs) if s.integrator == "batched" else [j() for j in jobs]
+    jobs = [lambda batcher, c=c: walk(batcher, *c) for c in chains if c[1]]
+    done = integration_batcher.run_jobs(jobs, s)
     rows = [{"model": model, "parameter": name, "value": fitted[name], "objective": cost0, "evaluations": 0,
              "message": "optimum", **{f"at_{k}": v for k, v in fitted.items()}} for name in names]
     for (name, _), chain in zip([c for c in chains if c[1]], done):

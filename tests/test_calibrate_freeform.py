@@ -176,11 +176,11 @@ def test_early_score_is_the_claims_early_rmse_after_the_first_reversal_as_before
     the former inline RMS over s_rev < s <= s_rev + early_strain, for runs reversed at once and after a lead."""
     from dataclasses import replace
 
-    from calibrate import route2
+    from calibrate import curves_integration
     from dem_contract import fabric_norm
 
     d = model2_truth
-    curves = route2.curves([(params_from_dict(d["doc2"]), "model1", "eq2")], d["replays"], d["s2"])[0]
+    curves = curves_integration.curves([(params_from_dict(d["doc2"]), "model1", "eq2")], d["replays"], d["s2"])[0]
     w = FAST.early_strain
     checked = 0
     for c, r in zip(curves, d["replays"]):

@@ -14,7 +14,7 @@ import pandas as pd
 import pytest
 from scipy import stats
 
-from calibrate import bootstrap, coverage, curves_fit, dem_replays, identifiability, pipeline, profiles, route2, synthetic
+from calibrate import bootstrap, coverage, curves_fit, curves_integration, dem_replays, identifiability, pipeline, profiles, synthetic
 from calibrate.backsolve import BacksolveSettings
 from calibrate.io import read_cases, steady_values
 from calibrate.smoothing import smooth_cases
@@ -104,14 +104,14 @@ def model2_replays(tmp_path_factory):
 def test_route2_fit_holds_a_fixed_parameter_and_refits_the_others(model2_replays):
     reps, steady, d = model2_replays
     start = dict(c1=-1.0, c2=-10.0, c3=0.0)
-    f = curves_fit.fit(reps, d, "model2", start, steady, 0.04, route2.Route2Settings(max_evals=60), fixed={"c2": -19.6})
+    f = curves_fit.fit(reps, d, "model2", start, steady, 0.04, curves_integration.CurvesSettings(max_evals=60), fixed={"c2": -19.6})
     assert f.values["c2"] == -19.6 and list(f.values) == ["c1", "c2", "c3"]
     assert f.values["c1"] == pytest.approx(-1.6, rel=0.1)   # the others move to the truth
 
 
 def test_model2_profiles_are_finite_about_the_fit_and_the_sensitivity_matrix_has_full_rank(model2_replays):
     reps, steady, d = model2_replays
-    s2 = route2.Route2Settings()
+    s2 = curves_integration.CurvesSettings()
     f = curves_fit.fit(reps, d, "model2", d["model2"], steady, 0.04, s2)
     prof = profiles.profile(reps, d, "model2", f.values, steady, 0.04, s2,
                             profiles.ProfileSettings(n_points=8, evals=30), names=("c1", "c2"))
