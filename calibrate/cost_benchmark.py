@@ -109,13 +109,13 @@ def compare_tables(loop: pd.DataFrame, batched: pd.DataFrame) -> pd.DataFrame:
 def profile_cost(dirs, settings: pipeline.Settings, work: Path) -> tuple:
     """CPU seconds of the X_c profile alone (``settings.profile.n_points`` re-fits, batched) and of a calibration
     with every profile (``pipeline.run``, batched), in this process."""
-    s = replace(settings, route2=replace(settings.route2, integrator="batched"))
+    s = replace(settings, curves=replace(settings.curves, integrator="batched"))
     cases = pipeline.read_inputs(dirs, s)
     samples, steady = pipeline.smooth(cases, s)
     r1, doc1 = pipeline.fit_route1(samples, steady, pipeline.fit_friction(samples, steady, s), s)
     replays, r2, _ = pipeline.fit_route2(cases, samples, steady, r1, doc1, s, lambda m: None)
     c0 = time.process_time()
-    profiles.profile(replays, doc1, "model1", r2["model1"].values, steady, r1["sigma_mu"], s.route2, s.profile,
+    profiles.profile(replays, doc1, "model1", r2["model1"].values, steady, r1["sigma_mu"], s.curves, s.profile,
                      names=("X_c",))
     xc = time.process_time() - c0
     return xc, _timed(dirs, work, s)[1]
@@ -130,7 +130,7 @@ def run(case_dirs, data: str, out: Path, protocol_sets: dict, settings: pipeline
         times, tabs = {}, {}
         for integrator in curves_integration.INTEGRATORS[::-1]:   # loop first, then batched
             o = work / name / integrator
-            times[integrator] = _timed(dirs, o, replace(s, route2=replace(s.route2, integrator=integrator)))
+            times[integrator] = _timed(dirs, o, replace(s, curves=replace(s.curves, integrator=integrator)))
             tabs[integrator] = pd.read_csv(o / "params_table.csv")
             log(f"{name} {integrator}: {times[integrator][0]:.1f} s wall, {times[integrator][1]:.1f} s CPU")
         cmp = compare_tables(tabs["loop"], tabs["batched"])

@@ -4,7 +4,6 @@ from __future__ import annotations
 import datetime
 import math
 import time
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -13,38 +12,14 @@ import pandas as pd
 from dem_contract import fabric_angle_deg, fabric_norm
 from model import default_params, params_from_dict, steady_state
 
-from . import (backsolve, backsolve_fit, bootstrap, curves_fit, dem_replays, fits, freeform, identifiability, io, profiles,
+from . import (backsolve_fit, bootstrap, curves_fit, dem_replays, fits, freeform, identifiability, io, profiles,
                curves_integration, shear_stability, smoothing, tables)
+from .settings import Settings
 
 BLOCKS = ("friction_eq2", "friction_quadratic", "model1", "model2")
 #: Fewest seeds per ensemble for bootstrap intervals worth the name; below it the calibration warns.
 MIN_SEEDS = 3
 SCORES = ("score", "rms_A_norm", "rms_theta_A", "rms_mu")
-
-
-@dataclass
-class Settings:
-    protocols: tuple = io.REVERSAL_PROTOCOLS
-    smoothing: smoothing.SmoothingSettings = field(default_factory=smoothing.SmoothingSettings)
-    backsolve: backsolve.BacksolveSettings = field(default_factory=backsolve.BacksolveSettings)
-    route2: curves_integration.CurvesSettings = field(default_factory=curves_integration.CurvesSettings)
-    steady_weight: float = 1.0
-    xc_margin: float = 2e-3
-    n_boot: int = 20
-    boot_evals: int = 60
-    seed: int = 0
-    min_samples: int = io.MIN_SAMPLES
-    figures: bool = True
-    freeform: freeform.FreeformSettings | None = None   # None: no free-form fit (step 5b)
-    profile: profiles.ProfileSettings = field(default_factory=profiles.ProfileSettings)
-
-    def as_dict(self) -> dict:
-        return {"protocols": list(self.protocols), "smoothing": self.smoothing.as_dict(),
-                "backsolve": self.backsolve.as_dict(), "route2": self.route2.as_dict(),
-                "steady_weight": self.steady_weight, "xc_margin": self.xc_margin, "n_boot": self.n_boot,
-                "boot_evals": self.boot_evals, "bootstrap_seed": self.seed, "min_samples": self.min_samples,
-                "freeform": self.freeform.as_dict() if self.freeform else None,
-                "profile": self.profile.as_dict()}
 
 
 def _route2_start(replays, doc, model, r1_values, steady, sigma_mu, s2, xc_margin):
@@ -165,9 +140,9 @@ def fit_route2(cases, samples, steady, r1, doc1, settings: Settings, log):
     replays = dem_replays.prepare(cases, samples, settings.backsolve)
     r2, doc2 = {}, dict(doc1)
     for model in ("model1", "model2"):
-        start = _route2_start(replays, doc1, model, r1[model].values, steady, r1["sigma_mu"], settings.route2,
+        start = _route2_start(replays, doc1, model, r1[model].values, steady, r1["sigma_mu"], settings.curves,
                               settings.xc_margin)
-        r2[model] = curves_fit.fit(replays, doc1, model, start, steady, r1["sigma_mu"], settings.route2)
+        r2[model] = curves_fit.fit(replays, doc1, model, start, steady, r1["sigma_mu"], settings.curves)
         doc2[model] = r2[model].values
         log(f"route 2 {model}: {r2[model].extra['evaluations']} evaluations, {r2[model].message} "
             f"({time.time() - t0:.1f} s in route 2)")
@@ -191,7 +166,7 @@ def fit_freeform(replays, doc2, steady, r1, out: Path, settings: Settings, log):
         tables.write_csv(freeform.note_table(note), out / "freeform.csv")
         return None, None
     t0 = time.process_time()
-    res = freeform.run(replays, doc2, steady, r1["sigma_mu"], settings.route2, settings.freeform, log)
+    res = freeform.run(replays, doc2, steady, r1["sigma_mu"], settings.curves, settings.freeform, log)
     tables.write_csv(res["table"], out / "freeform.csv")
     log(f"free-form fit done ({time.process_time() - t0:.1f} s CPU)")
     v = shear_stability.check(res["spline"])
@@ -217,7 +192,7 @@ def run_bootstrap(cases, samples, replays, r1, r2, doc1, settings: Settings, log
     values, heldout = bootstrap.run(
         cases, samples, lambda names: io.steady_values([by_name[n] for n in names]), replays,
         {"route1": r1, "route2": r2}, doc1,
-        {"backsolve": settings.backsolve, "route2": settings.route2, "steady_weight": settings.steady_weight,
+        {"backsolve": settings.backsolve, "route2": settings.curves, "steady_weight": settings.steady_weight,
          "xc_margin": settings.xc_margin},
         n_boot=settings.n_boot, seed=settings.seed, boot_evals=settings.boot_evals, log=log, edges=edges)
     iv = bootstrap.intervals(values) if len(values) else pd.DataFrame(
@@ -246,11 +221,11 @@ def identify(replays, r1, r2, doc1, steady, iv, settings: Settings, log):
             m = iv[(iv["route"] == "curves") & (iv["block"] == model)] if len(iv) else iv
             widths = dict(zip(m["parameter"], m["high"] - m["low"])) if len(m) else {}
             profs.append(profiles.profile(replays, doc1, model, r2[model].values, steady, r1["sigma_mu"],
-                                          settings.route2, settings.profile, x_lower=xl, widths=widths))
+                                          settings.curves, settings.profile, x_lower=xl, widths=widths))
             log(f"profiles {model}: {profiles.PROFILED[model]} x {settings.profile.n_points} points, "
                 f"{time.process_time() - c0:.1f} s CPU")
         S, _, r0 = identifiability.sensitivity(replays, doc1, model, r2[model].values, r1["sigma_mu"],
-                                               settings.route2)
+                                               settings.curves)
         delta = profiles.threshold(r0, 0.5 * float(np.sum(r0**2)), S.shape[1], settings.profile.level)
         svds.append(identifiability.svd_table(S, identifiability.KEYS[model], model, delta))
     prof = pd.concat(profs, ignore_index=True) if profs else pd.DataFrame(columns=profiles.COLUMNS)
@@ -312,7 +287,7 @@ def score_routes(replays, heldout, r1, r2, doc1, doc2, settings: Settings):
     n_used = int(r1["bins"].loc[r1["bins"]["used"], "n_samples"].sum())  # samples in the bins route 1 fits
     pairs = [(model, route, doc) for model in ("model1", "model2") for route, doc in (("backsolve", doc1), ("curves", doc2))]
     ins_all = dict(zip([(m, r) for m, r, _ in pairs], curves_fit.score_many(
-        [(params_from_dict(doc), model) for model, _, doc in pairs], replays, settings.route2, sigma_mu)))
+        [(params_from_dict(doc), model) for model, _, doc in pairs], replays, settings.curves, sigma_mu)))
     for model in ("model1", "model2"):
         ins_scores = {}
         for route, doc in (("backsolve", doc1), ("curves", doc2)):
@@ -577,7 +552,7 @@ def write_figures(out: Path, samples, replays, btab, doc1, doc2, final, default_
         fr = "eq2" if model == "model1" else "quadratic"
         try:
             preds[f"{model} ({default_route[model]})"] = {
-                r.label: curves_integration.replay_run(prm, r, model, fr, settings.route2) for r in replays}
+                r.label: curves_integration.replay_run(prm, r, model, fr, settings.curves) for r in replays}
         except (ValueError, RuntimeError) as exc:
             log(f"figure: {model} cannot be integrated ({exc})")
     figures.fig_curves(replays, preds, out / "fig_curves_model_vs_dem.png")

@@ -326,7 +326,7 @@ def run(case_dirs, params_path, protocols, out_yaml, max_evals: int = CurvesSett
     from . import pipeline
 
     settings = pipeline.Settings(protocols=tuple(protocols))
-    s2 = dataclasses.replace(settings.route2, max_evals=int(max_evals))
+    s2 = dataclasses.replace(settings.curves, max_evals=int(max_evals))
     cases = pipeline.read_inputs(case_dirs, settings)
     samples, steady = pipeline.smooth(cases, settings)
     sigma_mu = pipeline.backsolve_fit.mu_noise(samples)

@@ -96,7 +96,7 @@ def _to_route2(root, params, model, noise):
     samples, steady = pipeline.smooth(cases, s)
     r1, doc1 = pipeline.fit_route1(samples, steady, pipeline.fit_friction(samples, steady, s), s)
     replays, _, doc2 = pipeline.fit_route2(cases, samples, steady, r1, doc1, s, lambda m: None)
-    return dict(replays=replays, doc2=doc2, steady=steady, sigma_mu=r1["sigma_mu"], s2=s.route2)
+    return dict(replays=replays, doc2=doc2, steady=steady, sigma_mu=r1["sigma_mu"], s2=s.curves)
 
 
 @pytest.fixture(scope="module")

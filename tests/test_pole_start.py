@@ -73,7 +73,7 @@ def test_model_curves_at_zero_offset_are_finite_or_a_named_failure(truth_fit):
     doc.pop("provenance", None)
     doc.pop("intervals", None)
     prm = cps._block_params(doc, out["model1"])
-    for c in cps.curves([(prm, 0.0), (prm, DELTA_MIN)], replays, settings.route2):
+    for c in cps.curves([(prm, 0.0), (prm, DELTA_MIN)], replays, settings.curves):
         if isinstance(c, Exception):
             assert "starts at or beyond" not in str(c)   # never a start past the pole
         else:
