@@ -46,18 +46,18 @@ def parser() -> argparse.ArgumentParser:
     g.add_argument("--bin-width", type=float, default=bd.bin_width)
     g.add_argument("--min-bin-samples", type=int, default=bd.min_samples)
     g.add_argument("--cond-max", type=float, default=bd.cond_max)
-    g = p.add_argument_group("route 2 and bootstrap")
+    g = p.add_argument_group("curve fit (route 2) and bootstrap")
     g.add_argument("--route2-evals", type=int, default=rd.max_evals, help="model evaluations per curve fit (route 2)")
     g.add_argument("--route2-rtol", type=float, default=rd.rtol)
     g.add_argument("--route2-method", default=rd.method)
     g.add_argument("--integrator", choices=curves_integration.INTEGRATORS, default=rd.integrator,
-                   help="route 2 and bootstrap: 'batched' integrates all runs and Jacobian points of a step in one "
+                   help="curve fit and bootstrap: 'batched' integrates all runs and Jacobian points of a step in one "
                         "model.batched.simulate_batch call; 'loop' calls model.simulate per run")
     g.add_argument("--mu-weight", type=float, default=rd.mu_weight)
     g.add_argument("--bootstrap", type=int, default=Settings.n_boot, help="bootstrap replicates over seeds")
     g.add_argument("--bootstrap-evals", type=int, default=Settings.boot_evals, help="model evaluations per replicate fit")
     g.add_argument("--seed", type=int, default=Settings.seed, help="bootstrap random seed")
-    g = p.add_argument_group("identifiability (profiles of the route-2 objective)")
+    g = p.add_argument_group("identifiability (profiles of the curve fit's objective)")
     g.add_argument("--profile-points", type=int, default=profiles.ProfileSettings.n_points,
                    help="grid points per profiled parameter (X_c and the c_i); 0: no profiles")
     g.add_argument("--profile-evals", type=int, default=profiles.ProfileSettings.evals,

@@ -40,19 +40,17 @@ def mu_noise(samples):
     return max(float(1.4826 * np.median(np.abs(s - np.median(s)))), 1e-4)
 
 
-def fit_friction(samples, steady, settings: backsolve.BacksolveSettings, steady_weight: float) -> dict:
-    """Fit Eq. 2 and the quadratic law of [15] to the samples' mu(X).
+def fit_friction(samples, steady, sigma_mu: float, settings: backsolve.BacksolveSettings,
+                 steady_weight: float) -> dict:
+    """Fit Eq. 2 and the quadratic law of [15] to the samples' mu(X), each sample weighted by ``sigma_mu``.
 
     Returns
     -------
     dict
-        ``friction_eq2``, ``friction_quadratic`` (``fits.FitResult``) and
-        ``sigma_mu``, the per-sample friction noise they are weighted by (``mu_noise``).
+        ``friction_eq2``, ``friction_quadratic`` (``fits.FitResult``).
     """
     X, mu = friction_data(samples, settings)
-    sigma_mu = mu_noise(samples)
-    return {"sigma_mu": sigma_mu,
-            "friction_eq2": fits.fit_eq2(X, mu, sigma_mu, steady, steady_weight),
+    return {"friction_eq2": fits.fit_eq2(X, mu, sigma_mu, steady, steady_weight),
             "friction_quadratic": fits.fit_quadratic(X, mu, sigma_mu, steady, steady_weight)}
 
 
@@ -79,8 +77,9 @@ def fit_blocks(samples, steady, settings: backsolve.BacksolveSettings, steady_we
     -------
     dict
         ``bins`` (DataFrame), ``friction_eq2``, ``friction_quadratic``, ``model1``,
-        ``model2`` (``fits.FitResult``), ``sigma_mu``.
+        ``model2`` (``fits.FitResult``), ``sigma_mu`` (the samples' friction noise, ``mu_noise``).
     """
-    out = fit_friction(samples, steady, settings, steady_weight)
+    sigma_mu = mu_noise(samples)
+    out = {"sigma_mu": sigma_mu, **fit_friction(samples, steady, sigma_mu, settings, steady_weight)}
     out.update(fit_coefficients(samples, steady, settings, steady_weight, xc_margin, model1_start))
     return out

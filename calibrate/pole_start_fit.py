@@ -1,4 +1,4 @@
-r"""Route 2 for Model 1 with its pole a fitted offset above each run's start (``model.pole_start``).
+r"""The curve fit of Model 1 with its pole a fitted offset above each run's start (``model.pole_start``).
 
 Not one X_c for every run, but :math:`X_c = \max(X_{rev}, 0) + \delta` per run,
 with :math:`X_{rev}` the model's mirrored X at the run's reversal
@@ -15,11 +15,11 @@ its Eq. 2 fit. Per residual evaluation two batched integrations
 (``model.batched.simulate_batch``): the forward part of the runs that shear
 forward before reversing (their X_rev; X < 0 there, so it does not depend on
 the pole), then every run with its own X_c. A parameter set whose forward part
-or run fails (divergence, no steady state) scores as failed, as in route 2.
+or run fails (divergence, no steady state) scores as failed, as in the curve fit.
 
 Profile of delta: delta held on a grid from ``DELTA_MIN`` (the pole at the
 start) up, every other parameter refitted (warm start from the optimum); the
-95 % interval is route 2's likelihood-ratio threshold
+95 % interval is the curve fit's likelihood-ratio threshold
 (``calibrate.profiles.threshold``). A profile whose lowest point is inside the
 threshold has its lower end at 0: the data cannot tell the pole from the start.
 
@@ -50,7 +50,7 @@ from model.batched import simulate_batch
 from model.pole_start import (DELTA_MIN, FORMAT_TAG, KEYS, block_params, far_pole, forward_history, load,  # noqa: F401
                               mirrored_x, with_pole)
 
-from . import curves_fit, curves_integration, dem_replays, fits, profiles
+from . import curves_fit, curves_integration, fits, profiles
 from .curves_integration import FAILURES, CurvesSettings
 
 SCALE = np.array([1.0, 10.0, 1e3, 1.0, 10.0, 1e3, 0.01])
@@ -112,7 +112,7 @@ def reversal_x(params_list, replays, settings: CurvesSettings) -> np.ndarray:
 
 
 def curves(points, replays, settings: CurvesSettings) -> list:
-    """Per point ``(params, delta)``, the list (per replay) of route 2's model arrays, or the exception that failed it.
+    """Per point ``(params, delta)``, the list (per replay) of the curve fit's model arrays, or the exception that failed it.
 
     Each run is integrated with its own pole, ``with_pole(params, X_rev, delta)``; every
     (point, run) is one trajectory of a single batch (``curves_integration.integrate_requests``).
@@ -138,7 +138,7 @@ def curves(points, replays, settings: CurvesSettings) -> list:
 
 
 def _objective(replays, base_doc, steady, sigma_mu, settings: CurvesSettings, n_res, keys, scale, fixed):
-    """``curves_fit.counted_objective`` over the variant's residuals (route 2's, with the steady-state terms)."""
+    """``curves_fit.counted_objective`` over the variant's residuals (the curve fit's, with the steady-state terms)."""
     def evaluate(points):
         out, trials = [None] * len(points), []
         for k, p in enumerate(points):
@@ -323,14 +323,13 @@ def run(case_dirs, params_path, protocols, out_yaml, max_evals: int = CurvesSett
     place of X_c, delta's profile interval, the fit's summary, the X_rev of every run)
     and ``<stem>_profile.csv`` beside it. Returns the document.
     """
-    from . import pipeline
+    from .problem import pose
+    from .settings import Settings
 
-    settings = pipeline.Settings(protocols=tuple(protocols))
+    settings = Settings(protocols=tuple(protocols))
     s2 = dataclasses.replace(settings.curves, max_evals=int(max_evals))
-    cases = pipeline.read_inputs(case_dirs, settings)
-    samples, steady = pipeline.smooth(cases, settings)
-    sigma_mu = pipeline.backsolve_fit.mu_noise(samples)
-    replays = dem_replays.prepare(cases, samples, settings.backsolve)
+    problem = pose(case_dirs, settings)
+    replays, steady, sigma_mu = problem.replays, problem.steady, problem.sigma_mu
     base = load_params(params_path)
     doc = base.to_dict()
     doc.pop("provenance", None)

@@ -1,4 +1,4 @@
-r"""Profiles of the route-2 objective: each of X_c and the c_i held on a grid, the other parameters re-fitted.
+r"""Profiles of the curves fit's objective: each of X_c and the c_i held on a grid, the other parameters re-fitted.
 
 Method
 ------
@@ -50,7 +50,7 @@ from scipy import stats
 
 from model import params_from_dict
 
-from . import curves_fit, curves_integration, fits, integration_batcher, io
+from . import curves_fit, fits, integration_batcher, io
 
 #: The parameters profiled per model block.
 PROFILED = {"model1": ("c1", "c2", "X_c"), "model2": ("c1", "c2", "c3")}
@@ -100,7 +100,7 @@ def threshold(data_residuals, cost_min: float, n_free: int, level: float = 0.95)
     Parameters
     ----------
     data_residuals : array
-        Route 2's normalised data residuals at the optimum, run after run.
+        The curves fit's normalised data residuals at the optimum, run after run.
     cost_min : float
         :math:`C_{min}`.
     n_free : int
@@ -111,23 +111,21 @@ def threshold(data_residuals, cost_min: float, n_free: int, level: float = 0.95)
     return 0.5 * float(stats.chi2.ppf(level, 1)) * s2 * io.ar1_variance_inflation(r)
 
 
-def profile(replays, base_doc: dict, model: str, fitted: dict, steady: dict, sigma_mu: float,
-            r2settings: curves_integration.CurvesSettings, settings: ProfileSettings = ProfileSettings(), x_lower=None,
-            names=None, widths=None) -> pd.DataFrame:
-    """Profiles of ``names`` (default ``PROFILED[model]``) about the route-2 fit ``fitted``.
+def profile(problem, base_doc: dict, model: str, fitted: dict, x_lower=None, names=None, widths=None) -> pd.DataFrame:
+    """Profiles of ``names`` (default ``PROFILED[model]``) about the curve fit ``fitted``.
 
     Parameters
     ----------
-    replays : list of calibrate.dem_replays.Replay
+    problem : calibrate.problem.Problem
+        The replays, steady state and friction noise the curve fit ran on; its settings' ``curves`` (the fit's)
+        and ``profile`` (the grids and each re-fit's budget, ``ProfileSettings``).
     base_doc : dict
-        The parameter document holding the friction laws (route 1's).
+        The parameter document holding the friction laws (the back-solve's).
     model : {"model1", "model2"}
     fitted : dict
-        The block's route-2 values (the optimum, and every re-fit's start).
-    steady, sigma_mu, r2settings
-        As for ``curves_fit.fit``.
+        The block's curve-fit values (the optimum, and every re-fit's start).
     x_lower : float, optional
-        X_c's lower bound (default ``fits.xc_lower_bound(steady, r2settings.xc_margin)``).
+        X_c's lower bound (default ``fits.xc_lower_bound(steady, xc_margin)`` of the curves settings).
     widths : dict, optional
         name -> the width of its bootstrap interval (widens Model 2's grids, ``grid``).
 
@@ -137,14 +135,16 @@ def profile(replays, base_doc: dict, model: str, fitted: dict, steady: dict, sig
         ``COLUMNS`` plus the other parameters of the block (their re-fitted
         values); the optimum itself is one row per parameter (message "optimum").
     """
+    replays, steady, sigma_mu = problem.replays, problem.steady, problem.sigma_mu
+    curves_settings, settings = problem.settings.curves, problem.settings.profile
     names = tuple(names or PROFILED[model])
-    xl = fits.xc_lower_bound(steady, r2settings.xc_margin) if x_lower is None else x_lower
-    s = replace(r2settings, max_evals=settings.evals)
+    xl = fits.xc_lower_bound(steady, curves_settings.xc_margin) if x_lower is None else x_lower
+    s = replace(curves_settings, max_evals=settings.evals)
     prm = params_from_dict({**base_doc, model: dict(fitted)})
-    resid = curves_fit.residuals(prm, replays, model, FRICTION[model], sigma_mu, r2settings)
+    resid = curves_fit.residuals(prm, replays, model, FRICTION[model], sigma_mu, curves_settings)
     steady_r = fits.steady_fabric_residuals(*(fits.alpha_model1 if model == "model1" else fits.alpha_model2)(
         steady["X"], *[fitted[k] for k in (fits.M1_KEYS if model == "model1" else fits.M2_KEYS)]),
-        steady, r2settings.steady_weight)
+        steady, curves_settings.steady_weight)
     cost0 = 0.5 * float(np.sum(resid**2) + np.sum(np.asarray(steady_r) ** 2))
     chains = []   # per parameter, the grid below the estimate (downwards) and above it (upwards)
     for name in names:
