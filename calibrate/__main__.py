@@ -12,8 +12,9 @@ import sys
 
 from dem_contract.folders import new_folders, remove_new
 
-from . import backsolve, freeform, io, profiles, route2, smoothing
-from .pipeline import Settings, run
+from . import backsolve, curves_integration, freeform, io, profiles, smoothing
+from .pipeline import run
+from .settings import Settings
 
 PROTOCOL_NAME = re.compile(r"^[a-z][a-z0-9_]*$")
 
@@ -27,7 +28,7 @@ def protocol_name(text: str) -> str:
 
 
 def parser() -> argparse.ArgumentParser:
-    sd, bd, rd = smoothing.SmoothingSettings(), backsolve.BacksolveSettings(), route2.Route2Settings()
+    sd, bd, rd = smoothing.SmoothingSettings(), backsolve.BacksolveSettings(), curves_integration.CurvesSettings()
     p = argparse.ArgumentParser(prog="python -m calibrate", description=__doc__.splitlines()[0])
     p.add_argument("--dem", nargs="+", required=True, metavar="CASE_DIR",
                    help="case directories results/dem/<case>/ (seeds of one pressure and I form the ensemble)")
@@ -45,24 +46,24 @@ def parser() -> argparse.ArgumentParser:
     g.add_argument("--bin-width", type=float, default=bd.bin_width)
     g.add_argument("--min-bin-samples", type=int, default=bd.min_samples)
     g.add_argument("--cond-max", type=float, default=bd.cond_max)
-    g = p.add_argument_group("route 2 and bootstrap")
-    g.add_argument("--route2-evals", type=int, default=rd.max_evals, help="model evaluations per route-2 fit")
+    g = p.add_argument_group("curve fit (route 2) and bootstrap")
+    g.add_argument("--route2-evals", type=int, default=rd.max_evals, help="model evaluations per curve fit (route 2)")
     g.add_argument("--route2-rtol", type=float, default=rd.rtol)
     g.add_argument("--route2-method", default=rd.method)
-    g.add_argument("--integrator", choices=route2.INTEGRATORS, default=rd.integrator,
-                   help="route 2 and bootstrap: 'batched' integrates all runs and Jacobian points of a step in one "
+    g.add_argument("--integrator", choices=curves_integration.INTEGRATORS, default=rd.integrator,
+                   help="curve fit and bootstrap: 'batched' integrates all runs and Jacobian points of a step in one "
                         "model.batched.simulate_batch call; 'loop' calls model.simulate per run")
     g.add_argument("--mu-weight", type=float, default=rd.mu_weight)
     g.add_argument("--bootstrap", type=int, default=Settings.n_boot, help="bootstrap replicates over seeds")
     g.add_argument("--bootstrap-evals", type=int, default=Settings.boot_evals, help="model evaluations per replicate fit")
-    g.add_argument("--seed", type=int, default=0, help="bootstrap random seed")
-    g = p.add_argument_group("identifiability (profiles of the route-2 objective)")
+    g.add_argument("--seed", type=int, default=Settings.seed, help="bootstrap random seed")
+    g = p.add_argument_group("identifiability (profiles of the curve fit's objective)")
     g.add_argument("--profile-points", type=int, default=profiles.ProfileSettings.n_points,
                    help="grid points per profiled parameter (X_c and the c_i); 0: no profiles")
     g.add_argument("--profile-evals", type=int, default=profiles.ProfileSettings.evals,
                    help="model evaluations per profile point's re-fit")
     g = p.add_argument_group("other")
-    g.add_argument("--steady-weight", type=float, default=1.0)
+    g.add_argument("--steady-weight", type=float, default=Settings.steady_weight)
     g.add_argument("--min-samples", type=int, default=io.MIN_SAMPLES, help="fewest rows accepted per DEM file")
     g.add_argument("--no-figures", action="store_true")
     g = p.add_argument_group("free-form alphas (upper bound of any X-dependent Eq. 4; calibrate/freeform.py)")
@@ -126,8 +127,8 @@ def main(argv=None) -> int:
                                                   fine_span=a.sg_fine_span, order=a.sg_order),
             backsolve=backsolve.BacksolveSettings(rate_min=a.rate_min, skip=a.skip, bin_width=a.bin_width,
                                                   min_samples=a.min_bin_samples, cond_max=a.cond_max),
-            route2=route2.Route2Settings(max_evals=a.route2_evals, rtol=a.route2_rtol, method=a.route2_method,
-                                         integrator=a.integrator,
+            curves=curves_integration.CurvesSettings(max_evals=a.route2_evals, rtol=a.route2_rtol, method=a.route2_method,
+                                                     integrator=a.integrator,
                                          mu_weight=a.mu_weight, steady_weight=a.steady_weight),
             steady_weight=a.steady_weight, n_boot=a.bootstrap, boot_evals=a.bootstrap_evals, seed=a.seed,
             min_samples=a.min_samples, figures=not a.no_figures,

@@ -1,8 +1,8 @@
 r"""Bootstrap over seeds: parameter intervals and held-out (out-of-bag) prediction scores.
 
 A replicate draws, within each ensemble (group), as many seeds as it has, with
-replacement; both routes are refitted on the drawn seeds (route 1 from scratch,
-route 2 warm-started from its full-data fit under a smaller budget). The seeds
+replacement; both routes are refitted on the drawn seeds (the back-solve from scratch,
+the curve fit warm-started from its full-data fit under a smaller budget). The seeds
 *not* drawn are held out: each route's replicate parameters predict their runs
 (``curves_fit.score``). Intervals are the 2.5 and 97.5 percentiles of the replicate
 values; the held-out score of a route is the mean over replicates that held a
@@ -10,16 +10,16 @@ seed out.
 """
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pandas as pd
 
 from model import params_from_dict
 
-from . import curves_fit, route1, route2
-
-BLOCKS = ("friction_eq2", "friction_quadratic", "model1", "model2")
+from . import backsolve_fit, curves_fit, integration_batcher, io
+from .backsolve import binned
+from .results import BLOCKS, MODELS, Bootstrap
 
 
 def draw(cases, rng):
@@ -51,103 +51,116 @@ def params_doc(base: dict, blocks: dict) -> dict:
     return doc
 
 
-def run(cases, samples, steady_fn, replays, full, base_doc, settings, n_boot=20, seed=0, boot_evals=60,
-        log=print, edges=None):
-    """Bootstrap both routes.
+@dataclass(frozen=True, eq=False)
+class Replicate:
+    """One replicate: its number ``k``, the case names drawn (with repeats) and held out, the drawn cases'
+    samples (``resample``) and steady state, and its back-solve (``backsolve_fit.fit_blocks``)."""
+
+    k: int
+    drawn: list
+    held: list
+    samples: pd.DataFrame
+    steady: dict
+    backsolve: dict
+
+
+def run(problem, backsolve, curves, log=print) -> Bootstrap:
+    """Step 6, the bootstrap over seeds: both routes refitted per replicate, their held-out scores (module Notes).
 
     Parameters
     ----------
-    cases : list of io.Case
-    samples : DataFrame (``smoothing.smooth_cases``)
-    steady_fn : callable(list of case names) -> steady dict
-    replays : list of calibrate.dem_replays.Replay
-    full : dict
-        Full-data results: ``route1`` (dict of FitResult) and ``route2`` (dict model -> FitResult).
-    base_doc : dict
-        Parameter document with route-1 friction laws.
-    settings : dict with ``backsolve``, ``route2``, ``steady_weight``, ``xc_margin``
-    n_boot, seed, boot_evals : int
-    edges : array, optional
-        Bin edges of the full-data back-solve: the bins are re-solved per
-        replicate (route "bins", block = the bin's lower edge).
+    problem : calibrate.problem.Problem
+        Its cases are drawn from: ``settings.n_boot`` replicates from ``settings.seed``, each curve fit under
+        ``settings.boot_evals`` model evaluations.
+    backsolve : results.BacksolveFit
+        The full-data back-solve: each replicate's Model 1 start, and the bins every replicate re-solves
+        (route "bins", block = the bin's lower edge).
+    curves : results.CurvesFit
+        The full-data curve fit: each replicate's start.
 
     Returns
     -------
-    values : DataFrame, one row per (replicate, route, block, parameter)
-    heldout : DataFrame, one row per (replicate, route, model) with the held-out scores
+    results.Bootstrap
+        ``values``, one row per (replicate, route, block, parameter); ``heldout``, one row per (replicate,
+        route, model) with the held-out scores; their percentile ``intervals``.
     """
-    rng = np.random.default_rng(seed)
-    rows, held_rows = [], []
-    s2 = replace(settings["route2"], max_evals=boot_evals)
-    prepared = []
-    for k in range(n_boot):
-        drawn, held = draw(cases, rng)
-        smp = resample(samples, drawn)
-        steady = steady_fn(drawn)
+    settings = problem.settings
+    rng = np.random.default_rng(settings.seed)
+    by_name = {c.name: c for c in problem.cases}
+    bins = backsolve.bins
+    edges = np.append(bins["X_lo"].to_numpy(), bins["X_hi"].iloc[-1]) if len(bins) else None
+    rows, held_rows, prepared = [], [], []
+    for k in range(settings.n_boot):
+        drawn, held = draw(problem.cases, rng)
+        smp = resample(problem.samples, drawn)
+        steady = io.steady_values([by_name[n] for n in drawn])
         try:
-            r1 = route1.run_route1(smp, steady, settings["backsolve"], settings["steady_weight"],
-                                   settings["xc_margin"], model1_start=full["route1"]["model1"].values)
+            solved = backsolve_fit.fit_blocks(smp, steady, settings.backsolve, settings.steady_weight,
+                                              settings.xc_margin, model1_start=backsolve.fits["model1"].values)
         except ValueError as exc:
-            log(f"bootstrap replicate {k}: route 1 failed ({exc}); replicate skipped")
+            log(f"bootstrap replicate {k}: back-solve failed ({exc}); replicate skipped")
             continue
-        prepared.append((k, smp, r1, drawn, held, steady))
+        prepared.append(Replicate(k, drawn, held, smp, steady, solved))
 
-    def replicate(k, smp, r1, drawn, held, steady):
-        doc1, doc2, fitted = _refit(k, smp, r1, drawn, replays, full, base_doc, steady, settings, s2, edges)
-        return fitted, _heldout_scores(k, doc1, doc2, [r for r in replays if r.case in held], r1["sigma_mu"],
-                                       settings["route2"])
+    def replicate(batcher, rep):
+        docs, fitted = refit(problem, rep, curves, edges, batcher)
+        return fitted, heldout_scores(problem, rep, docs, batcher)
 
-    jobs = [lambda p=p: replicate(*p) for p in prepared]
-    # batched: the replicates' route-2 fits and scores advance together, their integrations in one batch per round
-    done = route2.Lockstep().run(jobs) if settings["route2"].integrator == "batched" else [j() for j in jobs]
-    for (k, _, _, drawn, held, _), (fitted, scores) in zip(prepared, done):
+    jobs = [lambda batcher, rep=rep: replicate(batcher, rep) for rep in prepared]
+    # batched: the replicates' curve fits and scores advance together, their integrations in one batch per round
+    done = integration_batcher.run_jobs(jobs, settings.curves)
+    for rep, (fitted, scores) in zip(prepared, done):
         rows += fitted
         held_rows += scores
-        log(f"bootstrap replicate {k + 1}/{n_boot}: drawn {len(drawn)} seeds, held out {len(held)}")
+        log(f"bootstrap replicate {rep.k + 1}/{settings.n_boot}: drawn {len(rep.drawn)} seeds, "
+            f"held out {len(rep.held)}")
     values = pd.DataFrame(rows, columns=["replicate", "route", "block", "parameter", "value"])
-    heldout = pd.DataFrame(held_rows)
-    return values, heldout
+    iv = intervals(values) if len(values) else pd.DataFrame(columns=["route", "block", "parameter", "low", "high"])
+    return Bootstrap(values, pd.DataFrame(held_rows), iv)
 
 
-def _refit(k, smp, r1, drawn, replays, full, base_doc, steady, settings, s2, edges):
-    """One replicate's refits: route-1 rows, re-solved bins, route 2 warm-started from the full fit.
+def refit(problem, rep: Replicate, curves, edges, batcher) -> tuple:
+    """One replicate's refits: back-solve rows, re-solved bins, the curve fit warm-started from the full fit.
 
-    Returns the replicate's route-1 and route-2 parameter documents and its
-    ``values`` rows (replicate, route, block, parameter, value).
+    Returns the replicate's parameter documents (route -> document: ``backsolve``, ``curves``)
+    and its ``values`` rows (replicate, route, block, parameter, value).
     """
-    rows = [(k, "backsolve", block, name, v) for block in BLOCKS for name, v in r1[block].values.items()]
+    settings, k, solved = problem.settings, rep.k, rep.backsolve
+    rows = [(k, "backsolve", block, name, v) for block in BLOCKS for name, v in solved[block].values.items()]
     if edges is not None:
-        from .backsolve import binned
-        bb = binned(smp, settings["backsolve"], edges=edges)
+        bb = binned(rep.samples, settings.backsolve, edges=edges)
         for _, row in bb.iterrows():
             key = f"{row.X_lo:.6g}"
             rows += [(k, "bins", key, "alpha1", row.alpha1), (k, "bins", key, "alpha2", row.alpha2)]
-    doc1 = params_doc(base_doc, {b: r1[b].values for b in BLOCKS})
-    reps = [r for name in drawn for r in replays if r.case == name]
-    doc2 = dict(doc1)
-    for model in ("model1", "model2"):
-        f = curves_fit.fit(reps, doc1, model, full["route2"][model].values, steady, r1["sigma_mu"], s2)
-        doc2[model] = f.values
+    backsolve_doc = params_doc(problem.base_doc, {b: solved[b].values for b in BLOCKS})
+    reps = [r for name in rep.drawn for r in problem.replays if r.case == name]
+    budget = replace(settings.curves, max_evals=settings.boot_evals)
+    curves_doc = dict(backsolve_doc)
+    for model in MODELS:
+        f = curves_fit.fit(reps, backsolve_doc, model, curves.fits[model].values, rep.steady, solved["sigma_mu"],
+                           budget, batcher=batcher)
+        curves_doc[model] = f.values
         rows += [(k, "curves", model, name, v) for name, v in f.values.items()]
-    return doc1, doc2, rows
+    return {"backsolve": backsolve_doc, "curves": curves_doc}, rows
 
 
 #: The first columns of ``heldout_scores.csv`` (the scores follow; the header alone when no replicate held a seed out).
 HELDOUT_COLUMNS = ["replicate", "route", "model", "n_heldout_runs"]
 
 
-def _heldout_scores(k, doc1, doc2, held_reps, sigma_mu, settings_route2) -> list:
-    """Scores of one replicate's routes on its held-out runs (none if every seed was drawn)."""
+def heldout_scores(problem, rep: Replicate, docs: dict, batcher) -> list:
+    """Scores of one replicate's routes (``docs``: route -> document) on its held-out runs (none if every seed
+    was drawn)."""
+    held_reps = [r for r in problem.replays if r.case in rep.held]
     out = []
     if not held_reps:
         return out
-    keys = [(route, doc, model) for route, doc in (("backsolve", doc1), ("curves", doc2))
-            for model in ("model1", "model2")]
-    prms = {route: params_from_dict(doc, source=f"bootstrap {k} {route}") for route, doc, _ in keys}
-    scores = curves_fit.score_many([(prms[route], model) for route, _, model in keys], held_reps, settings_route2,
-                               sigma_mu)   # the four (route, model) pairs in one batch
-    for (route, _, model), sc in zip(keys, scores):
-        out.append({**dict(zip(HELDOUT_COLUMNS, (k, route, model, len(held_reps)))), **sc})
+    keys = [(route, model) for route in docs for model in MODELS]
+    prms = {route: params_from_dict(doc, source=f"bootstrap {rep.k} {route}") for route, doc in docs.items()}
+    scores = curves_fit.score_many([(prms[route], model) for route, model in keys], held_reps,
+                                   problem.settings.curves, rep.backsolve["sigma_mu"], batcher)   # one batch
+    for (route, model), sc in zip(keys, scores):
+        out.append({**dict(zip(HELDOUT_COLUMNS, (rep.k, route, model, len(held_reps)))), **sc})
     return out
 
 

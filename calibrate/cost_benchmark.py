@@ -2,7 +2,7 @@
 
 ``python -m calibrate.cost_benchmark --results results --out results/accuracy`` calibrates
 each calibration set of the campaign under ``<results>/dem/`` twice in one run, with
-route 2 and the bootstrap integrating the model one run at a time (``loop``:
+the curve fit and the bootstrap integrating the model one run at a time (``loop``:
 ``model.simulate``) and in batches (``batched``: ``model.batched.simulate_batch``),
 and writes
 
@@ -13,7 +13,7 @@ and writes
   table outside the loop table's bootstrap interval, ``max_shift_over_width`` is the
   largest |difference| over the interval's width;
 - the profiles' cost (``calibrate.profiles``), batched: ``xc_profile_cpu_s`` is the
-  profile of Model 1's X_c alone (``profile_points`` re-fits, after route 2;
+  profile of Model 1's X_c alone (``profile_points`` re-fits, after the curve fit;
   target ``--profile-target`` seconds), ``with_profiles_cpu_s`` a whole calibration
   with every profile (X_c and the c_i of both models) and the sensitivity
   matrix, ``profiles_share`` the part of it they take (the loop and batched
@@ -49,7 +49,9 @@ import pandas as pd
 
 from dem_contract.labels import parse_case_label
 
-from . import io, pipeline, profiles, route2, tables
+from . import curves_integration, io, pipeline, profiles, tables
+from .problem import pose
+from .settings import Settings
 
 SYNTHETIC_M1 = dict(a1=-0.85, b1=0.0, c1=-3000.0, a2=-5.0, b2=100.0, c2=2000.0, X_c=0.0827)
 QUICK_SHAPE = dict(inertial_numbers=(2e-3, 5e-3), seeds=(1, 2, 3), preshear_strain=1.5, reversal_strain=0.6,
@@ -106,31 +108,29 @@ def compare_tables(loop: pd.DataFrame, batched: pd.DataFrame) -> pd.DataFrame:
     return m
 
 
-def profile_cost(dirs, settings: pipeline.Settings, work: Path) -> tuple:
+def profile_cost(dirs, settings: Settings, work: Path) -> tuple:
     """CPU seconds of the X_c profile alone (``settings.profile.n_points`` re-fits, batched) and of a calibration
     with every profile (``pipeline.run``, batched), in this process."""
-    s = replace(settings, route2=replace(settings.route2, integrator="batched"))
-    cases = pipeline.read_inputs(dirs, s)
-    samples, steady = pipeline.smooth(cases, s)
-    r1, doc1 = pipeline.fit_route1(samples, steady, pipeline.fit_friction(samples, steady, s), s)
-    replays, r2, _ = pipeline.fit_route2(cases, samples, steady, r1, doc1, s, lambda m: None)
+    s = replace(settings, curves=replace(settings.curves, integrator="batched"))
+    problem = pose(dirs, s)
+    backsolve = pipeline.fit_backsolve(problem, pipeline.fit_friction(problem))
+    curves = pipeline.fit_curves(problem, backsolve, lambda m: None)
     c0 = time.process_time()
-    profiles.profile(replays, doc1, "model1", r2["model1"].values, steady, r1["sigma_mu"], s.route2, s.profile,
-                     names=("X_c",))
+    profiles.profile(problem, backsolve.doc, "model1", curves.fits["model1"].values, names=("X_c",))
     xc = time.process_time() - c0
     return xc, _timed(dirs, work, s)[1]
 
 
-def run(case_dirs, data: str, out: Path, protocol_sets: dict, settings: pipeline.Settings, target: float,
+def run(case_dirs, data: str, out: Path, protocol_sets: dict, settings: Settings, target: float,
         work: Path, log=print, profile_target: float = 60.0):
     rows, params = [], []
     for name, (dirs, protocols) in calibration_sets(case_dirs, protocol_sets).items():
         with_profiles = replace(settings, protocols=tuple(protocols), figures=False)
         s = replace(with_profiles, profile=replace(settings.profile, n_points=0))   # the integrators compared alone
         times, tabs = {}, {}
-        for integrator in route2.INTEGRATORS[::-1]:   # loop first, then batched
+        for integrator in curves_integration.INTEGRATORS[::-1]:   # loop first, then batched
             o = work / name / integrator
-            times[integrator] = _timed(dirs, o, replace(s, route2=replace(s.route2, integrator=integrator)))
+            times[integrator] = _timed(dirs, o, replace(s, curves=replace(s.curves, integrator=integrator)))
             tabs[integrator] = pd.read_csv(o / "params_table.csv")
             log(f"{name} {integrator}: {times[integrator][0]:.1f} s wall, {times[integrator][1]:.1f} s CPU")
         cmp = compare_tables(tabs["loop"], tabs["batched"])
@@ -161,7 +161,7 @@ def parser() -> argparse.ArgumentParser:
                    help="time a model-made campaign of the quick preset's shape even if DEM cases exist")
     p.add_argument("--protocol-set", action="append", default=[], metavar="NAME=PROTOCOL[,PROTOCOL]",
                    help="an extra set of every case with these protocols (e.g. heaviside_only=heaviside)")
-    p.add_argument("--bootstrap", type=int, default=pipeline.Settings.n_boot, help="bootstrap replicates per set")
+    p.add_argument("--bootstrap", type=int, default=Settings.n_boot, help="bootstrap replicates per set")
     p.add_argument("--target", type=float, default=10.0, help="target CPU seconds per set (batched)")
     p.add_argument("--profile-target", type=float, default=60.0,
                    help="target CPU seconds of the X_c profile per set (batched)")
@@ -195,7 +195,7 @@ def main(argv=None) -> int:
             data = f"DEM cases of {dem}"
         log(f"cost_benchmark: {len(case_dirs)} case(s), {data}")
         try:
-            cost = run(case_dirs, data, Path(a.out), protocol_sets, pipeline.Settings(n_boot=a.bootstrap),
+            cost = run(case_dirs, data, Path(a.out), protocol_sets, Settings(n_boot=a.bootstrap),
                        a.target, work, log, a.profile_target)
         except io.DEMInputError as exc:
             print(f"cost_benchmark: bad DEM input: {exc}", file=sys.stderr)

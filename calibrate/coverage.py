@@ -9,7 +9,7 @@ by ``pipeline.run``. Two truths, each the law a calibration block assumes
 the friction residuals, so Model 2's data carry its own quadratic law):
 
 - ``model2``: Model 2 with the quadratic friction law (as fitted on the quick
-  campaign, set ``all``); checked: Model 2's c_i (route 2) and the quadratic law;
+  campaign, set ``all``); checked: Model 2's c_i (the curve fit) and the quadratic law;
 - ``eq2``: Model 1 with Eq. 2 (the round-trip test's truth); checked: Eq. 2.
 
 The data carry the two noises the DEM has:
@@ -42,6 +42,7 @@ from scipy import stats
 from model import default_params, params_from_dict
 
 from . import pipeline, profiles, synthetic
+from .settings import Settings
 from .cost_benchmark import QUICK_SHAPE
 
 #: The truths (module Notes): the blocks each sets, the model and friction law that make its data.
@@ -88,13 +89,13 @@ def write_realisation(root, truth: str, k: int, jitter: float, seeds: int = 3) -
     return dirs
 
 
-def default_settings(truth: str) -> pipeline.Settings:
+def default_settings(truth: str) -> Settings:
     """The calibration's defaults; profiles only where the truth's checked rows use them (Model 2)."""
     models = ("model2",) if truth == "model2" else ()
-    return pipeline.Settings(figures=False, profile=profiles.ProfileSettings(models=models))
+    return Settings(figures=False, profile=profiles.ProfileSettings(models=models))
 
 
-def run(n: int, jitter: float = 0.05, truths=tuple(TRUTHS), settings: pipeline.Settings | None = None, log=print,
+def run(n: int, jitter: float = 0.05, truths=tuple(TRUTHS), settings: Settings | None = None, log=print,
         first: int = 0) -> pd.DataFrame:
     """Calibrate ``n`` realisations of each truth; one row per (truth, realisation, block, parameter) checked."""
     rows = []

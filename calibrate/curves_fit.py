@@ -1,7 +1,7 @@
-r"""The curves route (route 2) fitted: its residuals, its objective under a budget, the fit and its scores.
+r"""The curves route fitted (the tables' ``curves``): its residuals, its objective under a budget, the fit, its scores.
 
 Residuals, over every sample of every seed and chosen protocol (raw DEM values,
-not smoothed), of the model's curves along the runs' replays (``calibrate.route2.curves``):
+not smoothed), of the model's curves along the runs' replays (``calibrate.curves_integration.curves``):
 
 .. math::
     \frac{a_m - a}{\sigma_a},\ \frac{b_m - b}{\sigma_b},\
@@ -28,13 +28,13 @@ from model import params_from_dict
 
 from . import fits, shear_stability
 from .fits import FitResult
-from .route2 import FAILURES, Route2Settings, curves
+from .curves_integration import FAILURES, CurvesSettings, curves
 
 PENALTY = 1e3
 
 
-def residual_vector(ms, replays, sigma_mu, settings: Route2Settings):
-    """Route 2's normalised data residuals of the model curves ``ms``, replay after replay (module Notes)."""
+def residual_vector(ms, replays, sigma_mu, settings: CurvesSettings):
+    """The curves route's normalised data residuals of the model curves ``ms``, replay after replay (module Notes)."""
     parts = []
     for m, r in zip(ms, replays):
         parts += [(m[:, 0] - r.a) / r.sd_a, (m[:, 1] - r.b) / r.sd_b,
@@ -42,7 +42,7 @@ def residual_vector(ms, replays, sigma_mu, settings: Route2Settings):
     return np.concatenate(parts)
 
 
-def residuals(params, replays, model, friction, sigma_mu, settings: Route2Settings):
+def residuals(params, replays, model, friction, sigma_mu, settings: CurvesSettings):
     """Normalised residuals of every replay (see module Notes); raises on pole / no steady state."""
     (c,) = curves([(params, model, friction)], replays, settings)
     if isinstance(c, Exception):
@@ -50,8 +50,8 @@ def residuals(params, replays, model, friction, sigma_mu, settings: Route2Settin
     return residual_vector(c, replays, sigma_mu, settings)
 
 
-def fit_residuals(ms, replays, sigma_mu, settings: Route2Settings, alphas, steady):
-    """The residuals route 2 minimises: the data residuals (``residual_vector``), then the steady fabric's rows.
+def fit_residuals(ms, replays, sigma_mu, settings: CurvesSettings, alphas, steady):
+    """The residuals the curves fit minimises: the data residuals (``residual_vector``), then the steady fabric's rows.
 
     ``alphas`` = (alpha1, alpha2) the fitted law gives at the steady X (``steady["X"]``): Model 1's or
     Model 2's law (``fits.alpha_model1``/``alpha_model2``) in ``fit``, a free-form spline in
@@ -68,10 +68,10 @@ class BudgetExhausted(Exception):
 def _with_block(base: dict, block: str, values: dict):
     d = dict(base)
     d[block] = dict(values)
-    return params_from_dict(d, source=f"route2 trial ({block})")
+    return params_from_dict(d, source=f"curves trial ({block})")
 
 
-def _scaled_bounds(model, steady, settings: Route2Settings, x_lower):
+def _scaled_bounds(model, steady, settings: CurvesSettings, x_lower):
     """Keys, scale and scaled bounds of the fitted block (Model 1: X_c above ``fits.xc_lower_bound``)."""
     if model == "model1":
         scale = np.array([1.0, 10.0, 1e3, 1.0, 10.0, 1e3, 0.01])
@@ -90,7 +90,7 @@ def counted_objective(evaluate, n_res: int, max_evals: int, batched: bool = True
     With ``batched``, ``workers(fun, xs)`` (the map ``least_squares`` evaluates the
     Jacobian's finite-difference points with) evaluates all points in one call first,
     then calls ``fun`` on each in scipy's order, so the counting, the budget and the
-    best point are those of one call per point. Shared by route 2 and ``calibrate.freeform``.
+    best point are those of one call per point. Shared by ``fit`` and ``calibrate.freeform``.
 
     Returns
     -------
@@ -125,8 +125,8 @@ def counted_objective(evaluate, n_res: int, max_evals: int, batched: bool = True
     return res, workers, state
 
 
-def _objective(replays, base_params, model, keys, scale, steady, sigma_mu, settings: Route2Settings, n_res,
-               fixed=None):
+def _objective(replays, base_params, model, keys, scale, steady, sigma_mu, settings: CurvesSettings, n_res,
+               fixed=None, batcher=None):
     """The residual function of ``fit``, its ``workers`` map, and the state they keep (``counted_objective``).
 
     A trial set that cannot be integrated (pole, divergence) or cannot shear steadily
@@ -147,7 +147,7 @@ def _objective(replays, base_params, model, keys, scale, steady, sigma_mu, setti
                 trials.append((k, vals, _with_block(base_params, model, vals)))
             except FAILURES:
                 pass
-        got = curves([(prm, model, friction) for _, _, prm in trials], replays, settings)
+        got = curves([(prm, model, friction) for _, _, prm in trials], replays, settings, batcher)
         for (k, vals, prm), c in zip(trials, got):
             try:
                 if isinstance(c, Exception):
@@ -167,7 +167,7 @@ def _objective(replays, base_params, model, keys, scale, steady, sigma_mu, setti
 
 
 def fit(replays, base_params: dict, model: str, start: dict, steady: dict, sigma_mu: float,
-        settings: Route2Settings = Route2Settings(), x_lower=None, fixed=None) -> FitResult:
+        settings: CurvesSettings = CurvesSettings(), x_lower=None, fixed=None, batcher=None) -> FitResult:
     """Least-squares fit of the ``model`` block to the replays, from ``start``.
 
     Parameters
@@ -186,6 +186,8 @@ def fit(replays, base_params: dict, model: str, start: dict, steady: dict, sigma
     fixed : dict, optional
         Parameters of the block held at these values (not fitted; a profile's point,
         ``calibrate.profiles``); they are part of the returned values.
+    batcher : calibrate.integration_batcher.IntegrationBatcher, optional
+        The batcher the calling job runs under (``curves_integration.curves``).
     """
     keys, scale, lo, hi = _scaled_bounds(model, steady, settings, x_lower)
     fixed = dict(fixed or {})
@@ -193,7 +195,7 @@ def fit(replays, base_params: dict, model: str, start: dict, steady: dict, sigma
     keys, scale, lo, hi = tuple(k for k in keys if k not in fixed), scale[free], lo[free], hi[free]
     n_res = sum(3 * len(r.s) for r in replays) + fits.N_STEADY
     res, workers, state = _objective(replays, base_params, model, keys, scale, steady, sigma_mu, settings, n_res,
-                                     fixed)
+                                     fixed, batcher)
     x0 = np.array([start[k] for k in keys]) / scale
     with np.errstate(invalid="ignore"):
         x0 = np.clip(x0, np.where(np.isfinite(lo), lo + 1e-9 * np.abs(lo) + 1e-12, lo),
@@ -214,11 +216,11 @@ def fit(replays, base_params: dict, model: str, start: dict, steady: dict, sigma
     return FitResult(model, vals, state["best_cost"], n_data, rms, ok, message, {"evaluations": state["n"], "failed_evaluations": state["fails"]})
 
 
-def score(params, replays, model: str, settings: Route2Settings, sigma_mu: float) -> dict:
+def score(params, replays, model: str, settings: CurvesSettings, sigma_mu: float) -> dict:
     """Prediction error of ``params`` on ``replays`` (e.g. held-out seeds).
 
     Returns RMS of |A|, theta_A (degrees, wrapped), mu, ``score`` = RMS of
-    the normalised residuals (the route-2 objective without the steady terms),
+    the normalised residuals (the curves fit's objective without the steady terms),
     and ``failure``: empty, or, if the model cannot be integrated (pole,
     diverging fabric, no steady state), the reason, with ``inf`` in every
     number (the worst score, for comparisons; tables write NaN and the reason).
@@ -226,14 +228,15 @@ def score(params, replays, model: str, settings: Route2Settings, sigma_mu: float
     return score_many([(params, model)], replays, settings, sigma_mu)[0]
 
 
-def score_many(items, replays, settings: Route2Settings, sigma_mu: float) -> list:
-    """``score`` of each (params, model) of ``items`` on ``replays``, integrated together (``curves``)."""
+def score_many(items, replays, settings: CurvesSettings, sigma_mu: float, batcher=None) -> list:
+    """``score`` of each (params, model) of ``items`` on ``replays``, integrated together (``curves``, under
+    ``batcher`` if given)."""
     friction = {"model1": "eq2", "model2": "quadratic"}
-    got = curves([(prm, model, friction[model]) for prm, model in items], replays, settings)
+    got = curves([(prm, model, friction[model]) for prm, model in items], replays, settings, batcher)
     return [_score_of(c, replays, settings, sigma_mu) for c in got]
 
 
-def _score_of(c, replays, settings: Route2Settings, sigma_mu: float) -> dict:
+def _score_of(c, replays, settings: CurvesSettings, sigma_mu: float) -> dict:
     try:
         if isinstance(c, Exception):
             raise c

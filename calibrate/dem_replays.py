@@ -1,4 +1,4 @@
-r"""The DEM runs as route 2 replays them: pieces of one sign of the shear rate in path strain.
+r"""The DEM runs as the curves route replays them: pieces of one sign of the shear rate in path strain.
 
 Eq. 4 is rate independent (docs/model.md, Eq. 4), so a run is replayed in *path strain*:
 each piece of one sign of the shear rate becomes ``model.steady_shear(length,
@@ -6,7 +6,7 @@ sign)`` at unit rate, where time equals path strain, and the model is read at
 the samples' path strains (``report_grid``). The fabric starts from the run's own
 DEM state before the reversal (``dem_contract.pre_reversal_state``, the start
 ``compare`` uses too). Runs with the same start, history and samples share one
-integration (``replay_key``). The replays are integrated by ``calibrate.route2``
+integration (``replay_key``). The replays are integrated by ``calibrate.curves_integration``
 and fitted by ``calibrate.curves_fit``.
 """
 from __future__ import annotations

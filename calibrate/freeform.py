@@ -7,7 +7,7 @@ cubic B-splines on breaks over the X the samples visit, from their 0.5th to
 their 99.5th percentile, continued linearly outside; how many breaks and how
 they crowd toward the largest X visited, where a pole would act, is chosen by
 cross-validation, ``breaks_for``) is fitted by trajectory fitting on the
-residuals of route 2 (``route2.curves``, ``curves_fit.residual_vector`` and the
+residuals of the curves route (``curves_integration.curves``, ``curves_fit.residual_vector`` and the
 steady residuals of ``fits``), plus a roughness penalty
 
 .. math::
@@ -15,21 +15,21 @@ steady residuals of ``fits``), plus a roughness penalty
 
 over the breaks, exact (``roughness_matrix``): a straight line costs nothing,
 so the penalty shrinks toward linear alphas (Model 2's law, with alpha1 free
-to have a slope), not toward zero. The friction law is held as route 2
+to have a slope), not toward zero. The friction law is held as the curve fit
 holds Model 2's (the quadratic law of [15]), so the free-form fit and Model 2
-differ only in their alphas. The start is Model 2's route-2 fit, represented
+differ only in their alphas. The start is Model 2's curve fit, represented
 exactly (``laws.spline_of_linear``).
 
 Breaks and penalty by cross-validation: leave one seed (DEM case) out; for
 every knot layout of ``knot_layouts`` (number of breaks, crowding toward the
 largest X) and every :math:`\lambda` of ``penalties`` the fit on the other
 seeds predicts the held-out seed's runs; the pair with the lowest held-out
-mean squared normalised residual (route 2's objective) wins and is refitted
+mean squared normalised residual (the curve fit's objective) wins and is refitted
 on every seed. Evenly spaced breaks with too few of them limit the bound
 exactly where a pole acts (one cubic piece over the last fifth of the X
 range); the layouts crowded toward the largest X let the data ask for a bend
 there.
-Model 1 and Model 2 are refitted by route 2 on the same folds (from their
+Model 1 and Model 2 are refitted by the curve fit on the same folds (from their
 full-data fits, ``cv_evals`` evaluations), so every held-out run is predicted
 by the three laws calibrated without its seed: paired errors per run, averaged
 per seed, with a bootstrap interval over seeds (``shared_stats.mean_interval``).
@@ -52,7 +52,7 @@ X = 0, :math:`e_i = \alpha_i(X_{hi}) - \alpha_i(0) - \alpha_i'(0) X_{hi}`
 (Model 1's pole term :math:`c_i X^4/(X_c - X)` is such a bend), with its
 jackknife interval.
 
-Everything runs in one ``route2.Lockstep`` (each fit a thread; their
+Everything runs under an ``integration_batcher.IntegrationBatcher`` (each fit a thread; their
 integrations one ``simulate_batch`` call per round).
 """
 from __future__ import annotations
@@ -70,7 +70,8 @@ from model import params_from_dict
 from model.laws import AlphaSpline, spline_basis, spline_of_linear, spline_size
 from shared_stats import early_rmse, mean_interval
 
-from . import curves_fit, fits, route2, shear_stability
+from . import curves_fit, curves_integration, fits, shear_stability
+from .integration_batcher import IntegrationBatcher
 
 SCORES = ("early_A_norm", "early_A_mse", "A_norm", "theta_A", "mu")
 LAWS = ("freeform", "model1", "model2")
@@ -90,7 +91,7 @@ class FreeformSettings:
     max_evals: int = 180                                # model evaluations of the final fit (Jacobian points count)
     cv_evals: int = 60                                  # ... of each cross-validation fit
     early_strain: float = 0.1
-    friction: str = "quadratic"                         # Model 2's, as route 2 holds it
+    friction: str = "quadratic"                         # Model 2's, as the curve fit holds it
     n_resamples: int = 2000
 
     def __post_init__(self):
@@ -170,7 +171,7 @@ def _penalty_rows(spline: AlphaSpline, lam: float) -> np.ndarray:
 
 
 def fit_spline(replays, doc: dict, start: AlphaSpline, steady: dict, sigma_mu: float, lam: float,
-               settings: FreeformSettings, s2: route2.Route2Settings, max_evals: int):
+               settings: FreeformSettings, s2: curves_integration.CurvesSettings, max_evals: int, batcher=None):
     r"""Penalised least-squares fit of the spline coefficients to the replays (module Notes).
 
     Returns
@@ -188,7 +189,7 @@ def fit_spline(replays, doc: dict, start: AlphaSpline, steady: dict, sigma_mu: f
 
     def evaluate(points):
         sps = [unpack(p) for p in points]
-        got = route2.curves([(prm, "model2", settings.friction, sp) for sp in sps], replays, s2)
+        got = curves_integration.curves([(prm, "model2", settings.friction, sp) for sp in sps], replays, s2, batcher)
         out = []
         for sp, c in zip(sps, got):
             if isinstance(c, Exception):
@@ -242,10 +243,10 @@ def run_errors(c, replay, early_strain: float) -> dict:
             "mu": rms(c[:, 2] - replay.mu)}
 
 
-def _heldout(items, held, s2, sigma_mu, early_strain) -> list:
+def _heldout(items, held, s2, sigma_mu, early_strain, batcher) -> list:
     """Per item (params, model, friction[, spline]): (mean squared normalised residual, per-run errors) on ``held``."""
     out = []
-    for c in route2.curves(items, held, s2):
+    for c in curves_integration.curves(items, held, s2, batcher):
         if isinstance(c, Exception):
             out.append((math.inf, [{k: math.nan for k in SCORES} for _ in held]))
             continue
@@ -254,26 +255,29 @@ def _heldout(items, held, s2, sigma_mu, early_strain) -> list:
     return out
 
 
-def _fold_job(k, case, replays, doc2, candidates, steady, sigma_mu, settings, s2, models=True):
+def _fold_job(problem, curves_doc, case, candidates, models=True):
     """One fold: spline fits at every candidate (start on its breaks, penalty; the candidates share their breaks:
-    one batch) and, with ``models``, route-2 refits of both models without ``case``; held-out scores."""
-    train = [r for r in replays if r.case != case]
-    held = [r for r in replays if r.case == case]
+    one batch) and, with ``models``, curve-fit refits of both models without ``case``; held-out scores."""
+    steady, sigma_mu = problem.steady, problem.sigma_mu
+    settings, s2 = problem.settings.freeform, problem.settings.curves
+    train = [r for r in problem.replays if r.case != case]
+    held = [r for r in problem.replays if r.case == case]
 
-    def job():
-        sps = [fit_spline(train, doc2, start, steady, sigma_mu, lam, settings, s2, settings.cv_evals)[0]
+    def job(batcher):
+        sps = [fit_spline(train, curves_doc, start, steady, sigma_mu, lam, settings, s2, settings.cv_evals, batcher)[0]
                for start, lam in candidates]
-        prm = params_from_dict(doc2)
+        prm = params_from_dict(curves_doc)
         items = [(prm, "model2", settings.friction, sp) for sp in sps]
         if models:
             s2m = replace(s2, max_evals=settings.cv_evals)
-            refit = {m: curves_fit.fit(train, doc2, m, doc2[m], steady, sigma_mu, s2m).values
+            refit = {m: curves_fit.fit(train, curves_doc, m, curves_doc[m], steady, sigma_mu, s2m,
+                                       batcher=batcher).values
                      for m in ("model1", "model2")}
             for m in ("model1", "model2"):
-                d = dict(doc2)
+                d = dict(curves_doc)
                 d[m] = refit[m]
                 items.append((params_from_dict(d), m, "eq2" if m == "model1" else "quadratic"))
-        scores = _heldout(items, held, s2, sigma_mu, settings.early_strain)
+        scores = _heldout(items, held, s2, sigma_mu, settings.early_strain, batcher)
         errors = {"spline": [s[1] for s in scores[:len(sps)]]}
         if models:
             errors.update(model1=scores[-2][1], model2=scores[-1][1])
@@ -282,19 +286,16 @@ def _fold_job(k, case, replays, doc2, candidates, steady, sigma_mu, settings, s2
     return job
 
 
-def run(replays, doc2: dict, steady: dict, sigma_mu: float, s2: route2.Route2Settings,
-        settings: FreeformSettings = FreeformSettings(), log=print) -> dict:
+def run(problem, curves_doc: dict, log=print) -> dict:
     """Cross-validate the penalty, fit the free-form law on every seed, score it against Models 1 and 2.
 
     Parameters
     ----------
-    replays : list of calibrate.dem_replays.Replay
-    doc2 : dict
-        The route-2 parameter document (friction laws and both models' fits).
-    steady, sigma_mu
-        As for ``curves_fit.fit``.
-    s2 : route2.Route2Settings
-        Tolerances (the integrator must be "batched").
+    problem : calibrate.problem.Problem
+        The replays, steady state and friction noise to fit; its settings' ``freeform`` (``FreeformSettings``)
+        and ``curves`` (tolerances; the integrator must be "batched").
+    curves_doc : dict
+        The curve fit's parameter document (friction laws and both models' fits).
 
     Returns
     -------
@@ -305,20 +306,22 @@ def run(replays, doc2: dict, steady: dict, sigma_mu: float, s2: route2.Route2Set
         ``folds`` (jackknife AlphaSplines at the chosen grid point), ``errors`` (DataFrame: one row
         per held-out run and law), ``table`` (the ``freeform.csv`` DataFrame), ``fit`` (info).
     """
+    replays, steady, sigma_mu = problem.replays, problem.steady, problem.sigma_mu
+    settings, s2 = problem.settings.freeform, problem.settings.curves
     if s2.integrator != "batched":
         raise ValueError("free-form fit: needs the batched integrator (--integrator batched)")
-    m2 = doc2["model2"]
+    m2 = curves_doc["model2"]
     layouts = settings.knot_layouts()
     grid = [(n, crowd, lam) for n, crowd in layouts for lam in settings.penalties]
     cases = sorted({r.case for r in replays})
     if len(cases) < 2:
         raise ValueError(f"free-form fit: cross-validation leaves one seed out and needs 2 or more, got {cases}")
-    by_layout = []      # per layout, its folds (one Lockstep each: a batch shares its breaks); models on the first
+    by_layout = []      # per layout, its folds (one batcher each: a batch shares its breaks); models on the first
     for i, (n, crowd) in enumerate(layouts):
         start = spline_of_linear(breaks_for(replays, n, crowd), m2["c1"], 0.0, m2["c2"], m2["c3"])
         cands = [(start, lam) for lam in settings.penalties]
-        by_layout.append(route2.Lockstep().run([_fold_job(k, c, replays, doc2, cands, steady, sigma_mu, settings, s2,
-                                                          models=i == 0) for k, c in enumerate(cases)]))
+        jobs = [_fold_job(problem, curves_doc, c, cands, models=i == 0) for c in cases]
+        by_layout.append(IntegrationBatcher().run(jobs))
     folds = []          # per fold, every grid point in grid order (layouts outer, penalties inner)
     for f, base in enumerate(by_layout[0]):
         folds.append(dict(base, cv=[c for lay in by_layout for c in lay[f]["cv"]],
@@ -330,8 +333,9 @@ def run(replays, doc2: dict, steady: dict, sigma_mu: float, s2: route2.Route2Set
     j = int(np.nanargmin(np.where(np.isfinite(cv), cv, np.nan))) if np.isfinite(cv).any() else 0
     lam = grid[j][2]
     start = spline_of_linear(breaks_for(replays, *grid[j][:2]), m2["c1"], 0.0, m2["c2"], m2["c3"])
-    spline, info = route2.Lockstep().run([lambda: fit_spline(replays, doc2, start, steady, sigma_mu, lam, settings,
-                                                             s2, settings.max_evals)])[0]
+    final = [lambda batcher: fit_spline(replays, curves_doc, start, steady, sigma_mu, lam, settings, s2,
+                                        settings.max_evals, batcher)]
+    spline, info = IntegrationBatcher().run(final)[0]
     log(f"free-form: {grid[j][0]} breaks (crowding {grid[j][1]:g}) and penalty {lam:g} chosen by leave-one-seed-out "
         f"CV ({', '.join(f'{n}/{c:g}/{p:g}: {v:.4g}' for (n, c, p), v in zip(grid, cv))}); final fit "
         f"{info['message']}")

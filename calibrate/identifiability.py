@@ -1,16 +1,20 @@
-r"""What the data determine: the sensitivity matrix's effective rank and the per-parameter verdict.
+r"""What the data determine: profiles, the sensitivity matrix's effective rank and the per-parameter verdict.
+
+``identify`` is step 6b of ``pipeline.run``: the profiles of the curves fit's
+objective (``profiles``), the sensitivity matrix of each model and the verdict
+per parameter, from the curve fit and the bootstrap's intervals.
 
 Sensitivity matrix
 ------------------
-At the route-2 optimum :math:`\hat\theta` of a model block, the columns of
+At the curve fit's optimum :math:`\hat\theta` of a model block, the columns of
 
 .. math:: S_{ij} = \frac{\partial r_i}{\partial \theta_j}\, s_j, \qquad
           s_j = |\hat\theta_j| \ \text{(or 1 where } \hat\theta_j = 0),
 
-are the changes of route 2's normalised residuals :math:`r` (``route2``) per
+are the changes of the curves fit's normalised residuals :math:`r` (``curves_fit``) per
 relative change of each parameter (forward differences of relative step
 ``STEP``, a backward one where the forward point cannot be integrated; all
-points in one ``route2.curves`` batch). Its singular values
+points in one ``curves_integration.curves`` batch). Its singular values
 :math:`\sigma_1 \ge \dots \ge \sigma_p` give the curvature of the objective
 along the right singular vectors :math:`v_k`:
 :math:`C(\hat\theta + \epsilon\, v_k) - C(\hat\theta) \approx \tfrac12 \epsilon^2 \sigma_k^2`.
@@ -35,13 +39,15 @@ unit vector lies in the undetermined directions (``undetermined_weight``).
 from __future__ import annotations
 
 import math
+import time
 
 import numpy as np
 import pandas as pd
 
 from model import params_from_dict
 
-from . import curves_fit, fits, route2
+from . import curves_fit, curves_integration, fits, profiles
+from .results import MODELS, Identifiability
 
 STEP = 1e-3
 REL_THRESHOLD = 1e-3
@@ -49,8 +55,54 @@ FRICTION = {"model1": "eq2", "model2": "quadratic"}
 KEYS = {"model1": fits.M1_KEYS, "model2": fits.M2_KEYS}
 
 
+def identify(problem, backsolve, curves, boot, log) -> Identifiability:
+    """Step 6b, identifiability: profiles of X_c and the c_i, the sensitivity matrix's SVD, the verdict per parameter.
+
+    Parameters
+    ----------
+    problem : calibrate.problem.Problem
+        Its ``settings.profile`` says which models are profiled and how finely.
+    backsolve : results.BacksolveFit
+        Its document holds the friction laws the curve fit ran with.
+    curves : results.CurvesFit
+        The optimum profiled, and the X_c lower bound it ran under.
+    boot : results.Bootstrap
+        The percentile intervals: the grids' widths (``profiles.grid``) and the verdict's bootstrap interval.
+    log : callable
+
+    Returns
+    -------
+    results.Identifiability
+        Profiles (empty with ``profile.n_points = 0``) and their intervals, SVD and verdict of both models.
+    """
+    settings, iv, xl = problem.settings, boot.intervals, curves.x_lower
+    profs, svds, verdicts = [], [], []
+    for model in MODELS:
+        c0 = time.process_time()
+        fitted = curves.fits[model].values
+        if settings.profile.n_points > 0 and model in settings.profile.models:
+            m = iv[(iv["route"] == "curves") & (iv["block"] == model)] if len(iv) else iv
+            widths = dict(zip(m["parameter"], m["high"] - m["low"])) if len(m) else {}
+            profs.append(profiles.profile(problem, backsolve.doc, model, fitted, x_lower=xl, widths=widths))
+            log(f"profiles {model}: {profiles.PROFILED[model]} x {settings.profile.n_points} points, "
+                f"{time.process_time() - c0:.1f} s CPU")
+        S, _, r0 = sensitivity(problem.replays, backsolve.doc, model, fitted, problem.sigma_mu, settings.curves)
+        delta = profiles.threshold(r0, 0.5 * float(np.sum(r0**2)), S.shape[1], settings.profile.level)
+        svds.append(svd_table(S, KEYS[model], model, delta))
+    prof = pd.concat(profs, ignore_index=True) if profs else pd.DataFrame(columns=profiles.COLUMNS)
+    prof_iv = profiles.intervals(prof, xl) if len(prof) else pd.DataFrame(
+        columns=["model", "parameter", "low", "high", "identified", "note"])
+    for model, svd in zip(MODELS, svds):
+        m = iv[(iv["route"] == "curves") & (iv["block"] == model)] if len(iv) else iv
+        boot_iv = {r["parameter"]: (r["low"], r["high"]) for _, r in m.iterrows()}
+        bounds = {k: profiles.bounds_of(model, k, xl) for k in KEYS[model]}
+        verdicts.append(verdict(model, curves.fits[model].values, boot_iv, prof_iv[prof_iv["model"] == model], svd,
+                                bounds))
+    return Identifiability(prof, prof_iv, pd.concat(svds, ignore_index=True), pd.concat(verdicts, ignore_index=True))
+
+
 def sensitivity(replays, base_doc: dict, model: str, fitted: dict, sigma_mu: float,
-                settings: route2.Route2Settings) -> tuple:
+                settings: curves_integration.CurvesSettings) -> tuple:
     """The scaled sensitivity matrix :math:`S` of the module Notes and the column scales.
 
     Returns
@@ -77,7 +129,7 @@ def sensitivity(replays, base_doc: dict, model: str, fitted: dict, sigma_mu: flo
             items.append((params_from_dict({**base_doc, model: dict(zip(keys, x.tolist()))}), model, FRICTION[model]))
         except ValueError:
             items.append(None)
-    got = route2.curves([it for it in items if it is not None], replays, settings)
+    got = curves_integration.curves([it for it in items if it is not None], replays, settings)
     it = iter(got)
     vecs = []
     for item in items:
@@ -152,7 +204,7 @@ def verdict(model: str, fitted: dict, boot: dict, prof: pd.DataFrame, svd: pd.Da
     Parameters
     ----------
     fitted : dict
-        The route-2 values.
+        The curve fit's values.
     boot : dict
         name -> (low, high): the bootstrap interval.
     prof : DataFrame

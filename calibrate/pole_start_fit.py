@@ -1,4 +1,4 @@
-r"""Route 2 for Model 1 with its pole a fitted offset above each run's start (``model.pole_start``).
+r"""The curve fit of Model 1 with its pole a fitted offset above each run's start (``model.pole_start``).
 
 Not one X_c for every run, but :math:`X_c = \max(X_{rev}, 0) + \delta` per run,
 with :math:`X_{rev}` the model's mirrored X at the run's reversal
@@ -9,17 +9,17 @@ shared by every run, with a_i, b_i, c_i of Eq. 6.
 Method
 ------
 The residuals, their weights, the steady-state terms and the optimiser are
-route 2's (``calibrate.route2``): the same replays in path strain from each
+the curves route's (``calibrate.curves_integration``): the same replays in path strain from each
 run's own start (``dem_contract.pre_reversal_state``), the friction law held at
 its Eq. 2 fit. Per residual evaluation two batched integrations
 (``model.batched.simulate_batch``): the forward part of the runs that shear
 forward before reversing (their X_rev; X < 0 there, so it does not depend on
 the pole), then every run with its own X_c. A parameter set whose forward part
-or run fails (divergence, no steady state) scores as failed, as in route 2.
+or run fails (divergence, no steady state) scores as failed, as in the curve fit.
 
 Profile of delta: delta held on a grid from ``DELTA_MIN`` (the pole at the
 start) up, every other parameter refitted (warm start from the optimum); the
-95 % interval is route 2's likelihood-ratio threshold
+95 % interval is the curve fit's likelihood-ratio threshold
 (``calibrate.profiles.threshold``). A profile whose lowest point is inside the
 threshold has its lower end at 0: the data cannot tell the pole from the start.
 
@@ -50,8 +50,8 @@ from model.batched import simulate_batch
 from model.pole_start import (DELTA_MIN, FORMAT_TAG, KEYS, block_params, far_pole, forward_history, load,  # noqa: F401
                               mirrored_x, with_pole)
 
-from . import curves_fit, dem_replays, fits, profiles, route2
-from .route2 import FAILURES, Route2Settings
+from . import curves_fit, curves_integration, fits, profiles
+from .curves_integration import FAILURES, CurvesSettings
 
 SCALE = np.array([1.0, 10.0, 1e3, 1.0, 10.0, 1e3, 0.01])
 DELTA_MAX = 0.4
@@ -75,7 +75,7 @@ def _block_params(base_doc: dict, vals: dict):
     return block_params(base_doc, vals)
 
 
-def reversal_x(params_list, replays, settings: Route2Settings) -> np.ndarray:
+def reversal_x(params_list, replays, settings: CurvesSettings) -> np.ndarray:
     """The model's mirrored X at each replay's reversal, per parameter set: array (n_sets, n_replays), NaN if failed.
 
     A replay of one piece starts reversed: the mirrored X of its start fabric.
@@ -111,11 +111,11 @@ def reversal_x(params_list, replays, settings: Route2Settings) -> np.ndarray:
     return out
 
 
-def curves(points, replays, settings: Route2Settings) -> list:
-    """Per point ``(params, delta)``, the list (per replay) of route 2's model arrays, or the exception that failed it.
+def curves(points, replays, settings: CurvesSettings) -> list:
+    """Per point ``(params, delta)``, the list (per replay) of the curve fit's model arrays, or the exception that failed it.
 
     Each run is integrated with its own pole, ``with_pole(params, X_rev, delta)``; every
-    (point, run) is one trajectory of a single batch (``route2.integrate_requests``).
+    (point, run) is one trajectory of a single batch (``curves_integration.integrate_requests``).
     """
     if not points:
         return []
@@ -125,7 +125,7 @@ def curves(points, replays, settings: Route2Settings) -> list:
         items = [(with_pole(p, xr[i, j] if np.isfinite(xr[i, j]) else 0.0, d), "model1", "eq2")
                  for i, (p, d) in enumerate(points)]
         requests.append((items, [r], settings))
-    got = route2.integrate_requests(requests)
+    got = curves_integration.integrate_requests(requests)
     out = []
     for i in range(len(points)):
         bad = next((j for j in range(len(replays)) if not np.isfinite(xr[i, j])), None)
@@ -137,8 +137,8 @@ def curves(points, replays, settings: Route2Settings) -> list:
     return out
 
 
-def _objective(replays, base_doc, steady, sigma_mu, settings: Route2Settings, n_res, keys, scale, fixed):
-    """``curves_fit.counted_objective`` over the variant's residuals (route 2's, with the steady-state terms)."""
+def _objective(replays, base_doc, steady, sigma_mu, settings: CurvesSettings, n_res, keys, scale, fixed):
+    """``curves_fit.counted_objective`` over the variant's residuals (the curve fit's, with the steady-state terms)."""
     def evaluate(points):
         out, trials = [None] * len(points), []
         for k, p in enumerate(points):
@@ -162,7 +162,7 @@ def _objective(replays, base_doc, steady, sigma_mu, settings: Route2Settings, n_
 
 
 def fit(replays, base_doc: dict, start: dict, steady: dict, sigma_mu: float,
-        settings: Route2Settings = Route2Settings(), fixed=None) -> fits.FitResult:
+        settings: CurvesSettings = CurvesSettings(), fixed=None) -> fits.FitResult:
     """Least-squares fit of a_i, b_i, c_i and delta (``KEYS``) from ``start``; ``fixed`` holds some at given values.
 
     ``extra`` holds ``evaluations``, ``failed_evaluations`` and ``residuals`` (the
@@ -211,7 +211,7 @@ def starts(base_doc: dict) -> list:
             for a1, b1, a2, b2 in linear for c1, c2 in strengths for d in DELTA_STARTS]
 
 
-def fit_multistart(replays, base_doc, steady, sigma_mu, settings: Route2Settings,
+def fit_multistart(replays, base_doc, steady, sigma_mu, settings: CurvesSettings,
                    n_fits: int = N_FITS) -> fits.FitResult:
     """``fit`` from the ``n_fits`` best of ``starts`` (all scored in one batch first); the lowest cost.
 
@@ -235,7 +235,7 @@ def fit_multistart(replays, base_doc, steady, sigma_mu, settings: Route2Settings
     return best
 
 
-def profile_delta(replays, base_doc, fitted: dict, steady, sigma_mu, settings: Route2Settings, cost_min: float,
+def profile_delta(replays, base_doc, fitted: dict, steady, sigma_mu, settings: CurvesSettings, cost_min: float,
                   residuals, n_points: int = PROFILE_POINTS) -> tuple:
     """Profile of delta down to ``DELTA_MIN`` (module Notes): the table and its interval (``profiles.interval``).
 
@@ -314,7 +314,7 @@ def profile_interval(prof: pd.DataFrame) -> dict:
     return {"low": lo, "high": hi, "identified": bool(ok_lo and ok_hi), "note": "; ".join(notes)}
 
 
-def run(case_dirs, params_path, protocols, out_yaml, max_evals: int = Route2Settings.max_evals,
+def run(case_dirs, params_path, protocols, out_yaml, max_evals: int = CurvesSettings.max_evals,
         profile_points: int = PROFILE_POINTS, log=print) -> dict:
     """Fit the variant on ``case_dirs`` (their ``protocols``) from the set's ``params.yaml``; write it and its profile.
 
@@ -323,14 +323,13 @@ def run(case_dirs, params_path, protocols, out_yaml, max_evals: int = Route2Sett
     place of X_c, delta's profile interval, the fit's summary, the X_rev of every run)
     and ``<stem>_profile.csv`` beside it. Returns the document.
     """
-    from . import pipeline
+    from .problem import pose
+    from .settings import Settings
 
-    settings = pipeline.Settings(protocols=tuple(protocols))
-    s2 = dataclasses.replace(settings.route2, max_evals=int(max_evals))
-    cases = pipeline.read_inputs(case_dirs, settings)
-    samples, steady = pipeline.smooth(cases, settings)
-    sigma_mu = pipeline.route1.mu_noise(samples)
-    replays = dem_replays.prepare(cases, samples, settings.backsolve)
+    settings = Settings(protocols=tuple(protocols))
+    s2 = dataclasses.replace(settings.curves, max_evals=int(max_evals))
+    problem = pose(case_dirs, settings)
+    replays, steady, sigma_mu = problem.replays, problem.steady, problem.sigma_mu
     base = load_params(params_path)
     doc = base.to_dict()
     doc.pop("provenance", None)
@@ -377,7 +376,7 @@ def main(argv=None) -> int:
     ap.add_argument("--dem", nargs="+", required=True, help="DEM case directories the set is calibrated on")
     ap.add_argument("--params", required=True, help="the set's params.yaml (its Eq. 2 and Model 1 start)")
     ap.add_argument("--protocols", nargs="+", default=["heaviside", "sinusoidal"])
-    ap.add_argument("--max-evals", type=int, default=Route2Settings.max_evals, help="model evaluations per fit")
+    ap.add_argument("--max-evals", type=int, default=CurvesSettings.max_evals, help="model evaluations per fit")
     ap.add_argument("--profile-points", type=int, default=PROFILE_POINTS)
     ap.add_argument("--out", required=True, help="pole_start.yaml to write (its profile CSV beside it)")
     args = ap.parse_args(argv)

@@ -1,4 +1,4 @@
-r"""Profiles of the route-2 objective: each of X_c and the c_i held on a grid, the other parameters re-fitted.
+r"""Profiles of the curves fit's objective: each of X_c and the c_i held on a grid, the other parameters re-fitted.
 
 Method
 ------
@@ -8,14 +8,14 @@ the profile is
 .. math:: C_p(g) = \min_{\theta_{-j}} C(\theta_j = g, \theta_{-j}),
           \qquad C = \tfrac12 \lVert r \rVert^2,
 
-with :math:`r` route 2's normalised residuals (``route2``, module Notes).
+with :math:`r` the curves fit's normalised residuals (``curves_fit``, module Notes).
 Each grid point is one ``curves_fit.fit`` with ``fixed={name: g}`` under a budget
 of ``ProfileSettings.evals`` model evaluations, warm-started by continuation:
 the grid is walked outwards from the estimate in two chains (below, above),
 each point started from its neighbour's re-fit (the full fit for the first).
 A point whose every trial meets the pole or diverges is kept as failed
 (objective NaN). The chains of every profiled parameter of a model run
-together under ``route2.Lockstep``: their integrations go into one
+together under ``integration_batcher.IntegrationBatcher``: their integrations go into one
 ``model.batched.simulate_batch`` call per round.
 
 The 95 % profile interval is the set of :math:`g` with
@@ -50,7 +50,7 @@ from scipy import stats
 
 from model import params_from_dict
 
-from . import curves_fit, fits, io, route2
+from . import curves_fit, fits, integration_batcher, io
 
 #: The parameters profiled per model block.
 PROFILED = {"model1": ("c1", "c2", "X_c"), "model2": ("c1", "c2", "c3")}
@@ -100,7 +100,7 @@ def threshold(data_residuals, cost_min: float, n_free: int, level: float = 0.95)
     Parameters
     ----------
     data_residuals : array
-        Route 2's normalised data residuals at the optimum, run after run.
+        The curves fit's normalised data residuals at the optimum, run after run.
     cost_min : float
         :math:`C_{min}`.
     n_free : int
@@ -111,23 +111,21 @@ def threshold(data_residuals, cost_min: float, n_free: int, level: float = 0.95)
     return 0.5 * float(stats.chi2.ppf(level, 1)) * s2 * io.ar1_variance_inflation(r)
 
 
-def profile(replays, base_doc: dict, model: str, fitted: dict, steady: dict, sigma_mu: float,
-            r2settings: route2.Route2Settings, settings: ProfileSettings = ProfileSettings(), x_lower=None,
-            names=None, widths=None) -> pd.DataFrame:
-    """Profiles of ``names`` (default ``PROFILED[model]``) about the route-2 fit ``fitted``.
+def profile(problem, base_doc: dict, model: str, fitted: dict, x_lower=None, names=None, widths=None) -> pd.DataFrame:
+    """Profiles of ``names`` (default ``PROFILED[model]``) about the curve fit ``fitted``.
 
     Parameters
     ----------
-    replays : list of calibrate.dem_replays.Replay
+    problem : calibrate.problem.Problem
+        The replays, steady state and friction noise the curve fit ran on; its settings' ``curves`` (the fit's)
+        and ``profile`` (the grids and each re-fit's budget, ``ProfileSettings``).
     base_doc : dict
-        The parameter document holding the friction laws (route 1's).
+        The parameter document holding the friction laws (the back-solve's).
     model : {"model1", "model2"}
     fitted : dict
-        The block's route-2 values (the optimum, and every re-fit's start).
-    steady, sigma_mu, r2settings
-        As for ``curves_fit.fit``.
+        The block's curve-fit values (the optimum, and every re-fit's start).
     x_lower : float, optional
-        X_c's lower bound (default ``fits.xc_lower_bound(steady, r2settings.xc_margin)``).
+        X_c's lower bound (default ``fits.xc_lower_bound(steady, xc_margin)`` of the curves settings).
     widths : dict, optional
         name -> the width of its bootstrap interval (widens Model 2's grids, ``grid``).
 
@@ -137,33 +135,35 @@ def profile(replays, base_doc: dict, model: str, fitted: dict, steady: dict, sig
         ``COLUMNS`` plus the other parameters of the block (their re-fitted
         values); the optimum itself is one row per parameter (message "optimum").
     """
+    replays, steady, sigma_mu = problem.replays, problem.steady, problem.sigma_mu
+    curves_settings, settings = problem.settings.curves, problem.settings.profile
     names = tuple(names or PROFILED[model])
-    xl = fits.xc_lower_bound(steady, r2settings.xc_margin) if x_lower is None else x_lower
-    s = replace(r2settings, max_evals=settings.evals)
+    xl = fits.xc_lower_bound(steady, curves_settings.xc_margin) if x_lower is None else x_lower
+    s = replace(curves_settings, max_evals=settings.evals)
     prm = params_from_dict({**base_doc, model: dict(fitted)})
-    resid = curves_fit.residuals(prm, replays, model, FRICTION[model], sigma_mu, r2settings)
+    resid = curves_fit.residuals(prm, replays, model, FRICTION[model], sigma_mu, curves_settings)
     steady_r = fits.steady_fabric_residuals(*(fits.alpha_model1 if model == "model1" else fits.alpha_model2)(
         steady["X"], *[fitted[k] for k in (fits.M1_KEYS if model == "model1" else fits.M2_KEYS)]),
-        steady, r2settings.steady_weight)
+        steady, curves_settings.steady_weight)
     cost0 = 0.5 * float(np.sum(resid**2) + np.sum(np.asarray(steady_r) ** 2))
     chains = []   # per parameter, the grid below the estimate (downwards) and above it (upwards)
     for name in names:
         g = np.sort(grid(model, name, fitted[name], xl, settings, (widths or {}).get(name, 0.0)))
         chains += [(name, [float(x) for x in g[g < fitted[name]][::-1]]), (name, [float(x) for x in g[g >= fitted[name]]])]
 
-    def walk(name, values):
+    def walk(batcher, name, values):
         """One chain of re-fits outwards from the optimum, each started from the last that could be integrated."""
         start, out = dict(fitted), []
         for g in values:
             f = curves_fit.fit(replays, base_doc, model, {**start, name: g}, steady, sigma_mu, s, x_lower=xl,
-                           fixed={name: g})
+                               fixed={name: g}, batcher=batcher)
             out.append((g, f))
             if f.success:
                 start = dict(f.values)
         return out
 
-    jobs = [lambda c=c: walk(*c) for c in chains if c[1]]
-    done = route2.Lockstep().run(jobs) if s.integrator == "batched" else [j() for j in jobs]
+    jobs = [lambda batcher, c=c: walk(batcher, *c) for c in chains if c[1]]
+    done = integration_batcher.run_jobs(jobs, s)
     rows = [{"model": model, "parameter": name, "value": fitted[name], "objective": cost0, "evaluations": 0,
              "message": "optimum", **{f"at_{k}": v for k, v in fitted.items()}} for name in names]
     for (name, _), chain in zip([c for c in chains if c[1]], done):

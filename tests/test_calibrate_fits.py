@@ -56,7 +56,7 @@ def test_reversal_start_bound_is_the_student_t_prediction_bound_for_a_new_seed()
 
 
 def test_default_route_is_route_2_unless_route_1_predicts_held_out_seeds_clearly_better():
-    from calibrate.pipeline import choose_route
+    from calibrate.route_choice import choose_route
 
     def held(back, curves):
         return pd.DataFrame([{"replicate": k, "route": r, "score": v} for k, (b, c) in enumerate(zip(back, curves))

@@ -16,6 +16,8 @@ import pandas as pd
 import pytest
 
 from calibrate import freeform, pipeline, synthetic
+from calibrate.problem import pose
+from calibrate.settings import Settings
 from model import default_params, params_from_dict, steady_shear, steady_state
 from model.batched import simulate_batch
 from model.laws import AlphaSpline, spline_basis, spline_of_linear
@@ -87,31 +89,31 @@ def test_roughness_penalty_is_zero_for_lines_and_the_integral_of_the_squared_cur
     assert np.sum((R @ c) ** 2) == pytest.approx(4.0 * (br[-1] - br[0]), rel=1e-9)
 
 
-def _to_route2(root, params, model, noise):
+def _to_curves(root, params, model, noise):
+    """The calibration to its curve fit on a model-made ensemble, with the free-form settings ``FAST``."""
     fr = "quadratic" if model == "model2" else "eq2"
     dirs = synthetic.write_ensemble(root, params, seeds=(1, 2, 3), model=model, friction=fr,
                                     fabric_noise=noise * synthetic.FABRIC_NOISE, mu_noise=noise * synthetic.MU_NOISE)
-    s = pipeline.Settings()
-    cases = pipeline.read_inputs(dirs, s)
-    samples, steady = pipeline.smooth(cases, s)
-    r1, doc1 = pipeline.fit_route1(samples, steady, pipeline.fit_friction(samples, steady, s), s)
-    replays, _, doc2 = pipeline.fit_route2(cases, samples, steady, r1, doc1, s, lambda m: None)
-    return dict(replays=replays, doc2=doc2, steady=steady, sigma_mu=r1["sigma_mu"], s2=s.route2)
+    problem = pose(dirs, Settings(freeform=FAST))
+    backsolve = pipeline.fit_backsolve(problem, pipeline.fit_friction(problem))
+    doc2 = pipeline.fit_curves(problem, backsolve, lambda m: None).doc
+    return dict(problem=problem, replays=problem.replays, doc2=doc2, steady=problem.steady,
+                sigma_mu=problem.sigma_mu, s2=problem.settings.curves)
 
 
 @pytest.fixture(scope="module")
 def model2_truth(tmp_path_factory):
-    d = _to_route2(tmp_path_factory.mktemp("ff2"), default_params(), "model2", noise=0.0)
+    d = _to_curves(tmp_path_factory.mktemp("ff2"), default_params(), "model2", noise=0.0)
     t = time.process_time()
-    d["res"] = freeform.run(d["replays"], d["doc2"], d["steady"], d["sigma_mu"], d["s2"], FAST, log=lambda m: None)
+    d["res"] = freeform.run(d["problem"], d["doc2"], log=lambda m: None)
     d["cpu"] = time.process_time() - t
     return d
 
 
 @pytest.fixture(scope="module")
 def model1_truth(tmp_path_factory):
-    d = _to_route2(tmp_path_factory.mktemp("ff1"), truth_params(), "model1", noise=0.5)
-    d["res"] = freeform.run(d["replays"], d["doc2"], d["steady"], d["sigma_mu"], d["s2"], FAST, log=lambda m: None)
+    d = _to_curves(tmp_path_factory.mktemp("ff1"), truth_params(), "model1", noise=0.5)
+    d["res"] = freeform.run(d["problem"], d["doc2"], log=lambda m: None)
     return d
 
 
@@ -176,11 +178,11 @@ def test_early_score_is_the_claims_early_rmse_after_the_first_reversal_as_before
     the former inline RMS over s_rev < s <= s_rev + early_strain, for runs reversed at once and after a lead."""
     from dataclasses import replace
 
-    from calibrate import route2
+    from calibrate import curves_integration
     from dem_contract import fabric_norm
 
     d = model2_truth
-    curves = route2.curves([(params_from_dict(d["doc2"]), "model1", "eq2")], d["replays"], d["s2"])[0]
+    curves = curves_integration.curves([(params_from_dict(d["doc2"]), "model1", "eq2")], d["replays"], d["s2"])[0]
     w = FAST.early_strain
     checked = 0
     for c, r in zip(curves, d["replays"]):

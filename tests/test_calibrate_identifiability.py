@@ -6,6 +6,7 @@ sets with per-sample and seed-to-seed noise: 20 realisations cost about
 always-on version runs 2 realisations of each truth and a binomial bound that fails when
 the true coverage is 60 % with probability 0.92.
 """
+import dataclasses
 import math
 import os
 
@@ -14,10 +15,9 @@ import pandas as pd
 import pytest
 from scipy import stats
 
-from calibrate import bootstrap, coverage, curves_fit, dem_replays, identifiability, pipeline, profiles, route2, synthetic
-from calibrate.backsolve import BacksolveSettings
-from calibrate.io import read_cases, steady_values
-from calibrate.smoothing import smooth_cases
+from calibrate import bootstrap, coverage, curves_fit, curves_integration, identifiability, profiles, synthetic
+from calibrate.problem import pose
+from calibrate.settings import Settings
 from model import default_params, params_from_dict
 
 RUN_COVERAGE = os.environ.get("RUN_COVERAGE") == "1"
@@ -97,24 +97,26 @@ def model2_replays(tmp_path_factory):
     d = coverage.truth_doc("model2")   # Model 2 with its own quadratic friction law
     dirs = synthetic.write_ensemble(tmp_path_factory.mktemp("m2"), params_from_dict(d), seeds=(1, 2, 3),
                                     model="model2", friction="quadratic", preshear_strain=1.5, reversal_strain=0.6)
-    cases = read_cases(dirs)
-    return dem_replays.prepare(cases, smooth_cases(cases), BacksolveSettings()), steady_values(cases), d
+    # the calibration's problem of these runs, with a fixed friction noise and the profiles' grids of the test below
+    problem = dataclasses.replace(pose(dirs, Settings(profile=profiles.ProfileSettings(n_points=8, evals=30))),
+                                  sigma_mu=0.04)
+    return problem.replays, problem.steady, d, problem
 
 
-def test_route2_fit_holds_a_fixed_parameter_and_refits_the_others(model2_replays):
-    reps, steady, d = model2_replays
+def test_curve_fit_holds_a_fixed_parameter_and_refits_the_others(model2_replays):
+    reps, steady, d, _ = model2_replays
     start = dict(c1=-1.0, c2=-10.0, c3=0.0)
-    f = curves_fit.fit(reps, d, "model2", start, steady, 0.04, route2.Route2Settings(max_evals=60), fixed={"c2": -19.6})
+    f = curves_fit.fit(reps, d, "model2", start, steady, 0.04, curves_integration.CurvesSettings(max_evals=60),
+                       fixed={"c2": -19.6})
     assert f.values["c2"] == -19.6 and list(f.values) == ["c1", "c2", "c3"]
     assert f.values["c1"] == pytest.approx(-1.6, rel=0.1)   # the others move to the truth
 
 
 def test_model2_profiles_are_finite_about_the_fit_and_the_sensitivity_matrix_has_full_rank(model2_replays):
-    reps, steady, d = model2_replays
-    s2 = route2.Route2Settings()
+    reps, steady, d, problem = model2_replays
+    s2 = curves_integration.CurvesSettings()
     f = curves_fit.fit(reps, d, "model2", d["model2"], steady, 0.04, s2)
-    prof = profiles.profile(reps, d, "model2", f.values, steady, 0.04, s2,
-                            profiles.ProfileSettings(n_points=8, evals=30), names=("c1", "c2"))
+    prof = profiles.profile(problem, d, "model2", f.values, names=("c1", "c2"))
     assert len(prof) == 2 * 9 and (prof["delta"].dropna() >= 0).all()
     iv = profiles.intervals(prof, 0.0).set_index("parameter")
     for name in ("c1", "c2"):

@@ -3,7 +3,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from calibrate import pipeline, synthetic
+from calibrate import pipeline, problem, route_choice, synthetic
 from calibrate.profiles import ProfileSettings
 from model import default_params
 
@@ -17,18 +17,18 @@ def held(scores, failure="PoleError: X = 0.1 >= X_c = 0.09"):
 
 def test_heldout_means_leave_out_failed_replicates_and_count_them():
     h = held([1.0, np.inf, 3.0, np.inf])
-    m = pipeline.heldout_means(h)
+    m = route_choice.heldout_means(h)
     assert m["heldout_score"] == 2.0 and m["heldout_rms_theta_A"] == 40.0
     assert m["heldout_replicates"] == 4 and m["heldout_failed"] == 2
-    note = pipeline.score_note({"score": 1.1}, h)
+    note = route_choice.score_note({"score": 1.1}, h)
     assert "2 of 4 replicates" in note and "PoleError" in note
 
 
 def test_scores_are_nan_with_a_reason_when_nothing_could_be_integrated():
     h = held([np.inf, np.inf])
-    m = pipeline.heldout_means(h)
-    assert all(np.isnan(m[f"heldout_{k}"]) for k in pipeline.SCORES) and m["heldout_failed"] == 2
-    note = pipeline.score_note({"score": np.inf, "failure": "FabricDivergence: the fabric diverged"}, h)
+    m = route_choice.heldout_means(h)
+    assert all(np.isnan(m[f"heldout_{k}"]) for k in route_choice.SCORES) and m["heldout_failed"] == 2
+    note = route_choice.score_note({"score": np.inf, "failure": "FabricDivergence: the fabric diverged"}, h)
     assert "in-sample scores NaN" in note and "FabricDivergence" in note and "held-out scores NaN" in note
 
 
@@ -37,7 +37,7 @@ def test_seed_warning_below_three_seeds(seeds, warned):
     class Case:
         def __init__(self, s):
             self.group, self.name = "p1_I0.001", f"p1_I0.001_s{s}"
-    text = pipeline.seed_warning([Case(s) for s in seeds])
+    text = problem.seed_warning([Case(s) for s in seeds])
     assert bool(text) == warned
     if warned:
         assert f"p1_I0.001 ({len(seeds)} seed" in text and "fewer than 3 seeds" in text
@@ -60,7 +60,7 @@ def test_one_seed_calibration_warns_in_log_and_table_and_writes_no_inf(tmp_path)
 
 
 def test_a_dem_steady_angle_above_135_degrees_is_flagged_with_a_note():
-    from calibrate.pipeline import steady_angle_flag
+    from calibrate.route_choice import steady_angle_flag
     assert steady_angle_flag(124.7) == {"steady_theta_above_135": False, "steady_note": ""}
     flag = steady_angle_flag(141.0)
     assert flag["steady_theta_above_135"] is True

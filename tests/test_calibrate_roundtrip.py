@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 import yaml
 
-from calibrate import dem_replays, pipeline, route2, synthetic
+from calibrate import curves_integration, dem_replays, pipeline, synthetic
 from dem_contract import angle_difference, fabric_angle_deg, fabric_norm
 from calibrate.io import read_cases
 from calibrate.smoothing import smooth_cases
@@ -68,9 +68,9 @@ def test_dem_noise_round_trip_friction_and_curves(dem_noise_run):
     assert abs(p.friction_eq2.X0 - 0.028) < 0.002 and rel(p.friction_eq2.k1, 2.7) < 0.07
     cases = read_cases(dirs)
     reps = dem_replays.prepare(cases, smooth_cases(cases), BacksolveSettings())
-    s = route2.Route2Settings()
-    true_curves = route2.replay_run(truth_params(), reps[0], "model1", "eq2", s)
-    fit_curves = route2.replay_run(p, reps[0], "model1", "eq2", s)
+    s = curves_integration.CurvesSettings()
+    true_curves = curves_integration.replay_run(truth_params(), reps[0], "model1", "eq2", s)
+    fit_curves = curves_integration.replay_run(p, reps[0], "model1", "eq2", s)
     dA = fabric_norm(true_curves[:, 0], true_curves[:, 1]) - fabric_norm(fit_curves[:, 0], fit_curves[:, 1])
     assert np.sqrt(np.mean(dA**2)) < 0.003
 

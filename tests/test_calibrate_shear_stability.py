@@ -11,7 +11,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from calibrate import pipeline, profiles, shear_stability
+from calibrate import profiles, route_choice, shear_stability
 from model import default_params, params_from_dict, simulate, steady_shear
 from model.laws import alpha_model2, spline_of_linear
 
@@ -102,7 +102,7 @@ def quality_rows():
 
 def test_the_pipeline_names_an_unstable_set_and_moves_the_default_to_the_stable_route():
     quality, log = quality_rows(), []
-    routes = pipeline.guard_shear_stability(quality, {"model1": "curves", "model2": "backsolve"},
+    routes = route_choice.guard_shear_stability(quality, {"model1": "curves", "model2": "backsolve"},
                                             doc_with(UNSTABLE_MODEL2), doc_with(), log.append)
     assert routes == {"model1": "curves", "model2": "curves"}
     q = pd.DataFrame(quality).set_index(["model", "route"])
@@ -113,8 +113,8 @@ def test_the_pipeline_names_an_unstable_set_and_moves_the_default_to_the_stable_
 
 
 def test_the_pipeline_refuses_a_model_whose_every_route_cannot_shear_steadily():
-    with pytest.raises(pipeline.UnstableFit, match="model2: no fitted set can shear steadily"):
-        pipeline.guard_shear_stability(quality_rows(), {"model1": "curves", "model2": "curves"},
+    with pytest.raises(route_choice.UnstableFit, match="model2: no fitted set can shear steadily"):
+        route_choice.guard_shear_stability(quality_rows(), {"model1": "curves", "model2": "curves"},
                                        doc_with(UNSTABLE_MODEL2), doc_with(UNSTABLE_MODEL2), print)
 
 

@@ -37,7 +37,7 @@ def private_imports(source: str, where: str = "<source>") -> list[str]:
 
 
 def test_the_scan_names_a_private_import_and_a_private_name_of_an_imported_module():
-    source = "from .fits import _helper\nimport calibrate.route2 as r2\nfrom claims import table\n" \
+    source = "from .fits import _helper\nimport calibrate.curves_integration as r2\nfrom claims import table\n" \
              "x = r2._budget\ny = table._per_seed(1)\nz = self._own\n"
     assert private_imports(source, "m.py") == ["m.py:1: from .fits import _helper", "m.py:4: r2._budget",
                                                "m.py:5: table._per_seed"]

@@ -11,7 +11,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from calibrate import dem_replays, pipeline, synthetic
+from calibrate import synthetic
+from calibrate.problem import pose
+from calibrate.settings import Settings
 from calibrate import pole_start_fit as cps
 from compare import pole_start_predict as mps
 from compare.dem import load_reversals
@@ -65,15 +67,12 @@ def test_a_pole_offset_of_zero_is_clipped_to_the_smallest_offset():
 
 def test_model_curves_at_zero_offset_are_finite_or_a_named_failure(truth_fit):
     _, dirs, out = truth_fit
-    settings = pipeline.Settings(protocols=("heaviside", "sinusoidal"))
-    cases = pipeline.read_inputs(dirs, settings)
-    samples, _ = pipeline.smooth(cases, settings)
-    replays = dem_replays.prepare(cases, samples, settings.backsolve)
+    problem = pose(dirs, Settings(protocols=("heaviside", "sinusoidal")))
     doc = load_params(truth_fit[0] / "start.yaml").to_dict()
     doc.pop("provenance", None)
     doc.pop("intervals", None)
     prm = cps._block_params(doc, out["model1"])
-    for c in cps.curves([(prm, 0.0), (prm, DELTA_MIN)], replays, settings.route2):
+    for c in cps.curves([(prm, 0.0), (prm, DELTA_MIN)], problem.replays, problem.settings.curves):
         if isinstance(c, Exception):
             assert "starts at or beyond" not in str(c)   # never a start past the pole
         else:

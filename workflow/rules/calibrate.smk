@@ -27,7 +27,7 @@ CALIBRATION_TABLES = ["params_table", "backsolve_alpha_vs_X", "fit_quality"]
 # Also written by python -m calibrate (calibrate/pipeline.py), not in the report:
 # the bootstrap replicates, their held-out scores, the fitted curves on the DEM,
 # and what the data determine (calibrate/profiles.py, calibrate/identifiability.py):
-# the route-2 objective profiled over X_c and the c_i, its figure, the sensitivity
+# the curve fit's objective profiled over X_c and the c_i, its figure, the sensitivity
 # matrix's singular values, and the verdict per parameter.
 CALIBRATION_EXTRA = {
     "bootstrap": "bootstrap_values.csv",

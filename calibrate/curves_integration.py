@@ -1,12 +1,14 @@
-r"""Route 2's curves: the DEM runs' replays (``calibrate.dem_replays``) integrated for many parameter sets.
+r"""The curves route's integrations: the model along every DEM replay, for many parameter sets at once.
 
-Route 2 fits Model 1 / Model 2 to the DEM curves (the tables' "curves" route; the fit:
-``calibrate.curves_fit``). This module integrates the model along every replay for each
-parameter set it is given, and schedules those integrations into batches.
+The curves route (the tables' ``curves``, once "route 2") fits Model 1 / Model 2 to the DEM
+curves (the fit: ``calibrate.curves_fit``) along the runs' replays (``calibrate.dem_replays``).
+This module integrates the model along every replay for each parameter set it is given
+(``curves``); jobs that run side by side batch their integrations through
+``calibrate.integration_batcher``.
 
 Integrator
 ----------
-``Route2Settings.integrator`` chooses how the runs are integrated:
+``CurvesSettings.integrator`` chooses how the runs are integrated:
 
 - ``"batched"`` (default): every integration of one residual evaluation (all
   runs), and of one finite-difference Jacobian (the n + 1 parameter sets of the
@@ -22,17 +24,9 @@ Integrator
 A failure is per trajectory in both: a parameter set one of whose runs meets
 the pole, diverges or fails scores as failed; the other sets of the same batch
 are unaffected.
-
-Scheduler
----------
-``Lockstep`` runs jobs (bootstrap replicates, profile points, free-form folds) in
-threads and integrates the ``curves`` requests of every waiting job in one batch.
-A job joins the lockstep it runs under through the thread it runs in (``curves``
-finds it there), so the fits it calls take no argument for it.
 """
 from __future__ import annotations
 
-import threading
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -48,9 +42,9 @@ FAILURES = (PoleError, ValueError, FloatingPointError, RuntimeError)
 
 
 @dataclass(frozen=True)
-class Route2Settings:
-    """Route 2's settings: its integration (``method`` to ``max_steps``, ``integrator``; this module) and its fit
-    (``diff_step`` to ``xc_margin``; ``calibrate.curves_fit``), one record written to params.yaml."""
+class CurvesSettings:
+    """The curves route's settings: its integration (``method`` to ``max_steps``, ``integrator``; this module) and
+    its fit (``diff_step`` to ``xc_margin``; ``calibrate.curves_fit``), one record written to params.yaml."""
 
     method: str = "LSODA"   # switches to an implicit method where a trial set makes Eq. 4 stiff
     rtol: float = 1e-6
@@ -65,13 +59,13 @@ class Route2Settings:
 
     def __post_init__(self):
         if self.integrator not in INTEGRATORS:
-            raise ValueError(f"route 2: integrator = {self.integrator!r} is not one of {INTEGRATORS}")
+            raise ValueError(f"curves route: integrator = {self.integrator!r} is not one of {INTEGRATORS}")
 
     def as_dict(self) -> dict:
         return asdict(self)
 
 
-def replay_run(params, replay: Replay, model: str, friction: str, settings: Route2Settings, cache=None):
+def replay_run(params, replay: Replay, model: str, friction: str, settings: CurvesSettings, cache=None):
     """Model a, b and signed friction at the replay's samples, by ``model.simulate``. Raises PoleError / ValueError.
 
     ``cache`` (a dict) shares one integration between runs with the same
@@ -92,7 +86,7 @@ def replay_run(params, replay: Replay, model: str, friction: str, settings: Rout
     return signed(m, replay)
 
 
-def curves(items, replays, settings: Route2Settings) -> list:
+def curves(items, replays, settings: CurvesSettings, batcher=None) -> list:
     """Model curves of every replay for many parameter sets, by ``settings.integrator``.
 
     Parameters
@@ -103,7 +97,11 @@ def curves(items, replays, settings: Route2Settings) -> list:
         ``calibrate.freeform``; batched integrator only).
     replays : list of Replay
         The runs every set is integrated on.
-    settings : Route2Settings
+    settings : CurvesSettings
+    batcher : calibrate.integration_batcher.IntegrationBatcher, optional
+        The batcher the calling job runs under (batched integrator): the request
+        waits there and is integrated in one batch with every other job's
+        (``IntegrationBatcher.run``); without one it is integrated at once.
 
     Returns
     -------
@@ -115,7 +113,7 @@ def curves(items, replays, settings: Route2Settings) -> list:
     """
     if settings.integrator == "loop":
         if any(len(it) > 3 and it[3] is not None for it in items):
-            raise ValueError("route 2: free-form alphas (alpha_spline) need integrator = 'batched'")
+            raise ValueError("curves route: free-form alphas (alpha_spline) need integrator = 'batched'")
         out = []
         for prm, model, friction, *_ in items:
             cache = {}
@@ -124,15 +122,10 @@ def curves(items, replays, settings: Route2Settings) -> list:
             except FAILURES as exc:
                 out.append(exc)
         return out
-    return _curves_batched(items, replays, settings)
-
-
-def _curves_batched(items, replays, settings: Route2Settings) -> list:
-    """``curves`` by one ``simulate_batch`` call over every (item, distinct run); in lockstep when one runs."""
     if not items:
         return []
-    if getattr(_LOCKSTEP, "current", None) is not None:
-        return _LOCKSTEP.current.submit((items, replays, settings))
+    if batcher is not None:
+        return batcher.submit((items, replays, settings))
     return integrate_requests([(items, replays, settings)])[0]
 
 
@@ -186,78 +179,4 @@ def integrate_requests(requests) -> list:
             out.append([signed(by_key[replay_key(r)], r) for r in replays])
         outs.append(out)
     return outs
-
-
-class Lockstep:
-    """Run jobs in threads whose batched ``curves`` requests are integrated together, one batch per round.
-
-    Each job (e.g. one bootstrap replicate's fits) runs in its own thread; when
-    every job still running is waiting on a ``curves`` request, the last to
-    arrive integrates all requests in one ``simulate_batch`` call and hands
-    each its part. A job's results are those it gets alone (the batch's
-    trajectories are independent), so ``run`` returns what running the jobs one
-    after the other would; only the number of numpy passes changes.
-    """
-
-    def __init__(self):
-        self._cv = threading.Condition()
-        self._pending, self._active = [], 0
-
-    def run(self, jobs) -> list:
-        """Call every job (a callable without arguments) in its own thread; their results, or raise the first error."""
-        results, errors = [None] * len(jobs), [None] * len(jobs)
-        self._active = len(jobs)
-
-        def work(k):
-            _LOCKSTEP.current = self
-            try:
-                results[k] = jobs[k]()
-            except BaseException as exc:   # re-raised below, in the caller's thread
-                errors[k] = exc
-            finally:
-                _LOCKSTEP.current = None
-                with self._cv:
-                    self._active -= 1
-                    self._flush_if_ready()
-
-        threads = [threading.Thread(target=work, args=(k,), daemon=True) for k in range(len(jobs))]
-        for t in threads:
-            t.start()
-        for t in threads:
-            t.join()
-        for e in errors:
-            if e is not None:
-                raise e
-        return results
-
-    def submit(self, request):
-        slot = {"request": request}
-        with self._cv:
-            self._pending.append(slot)
-            self._flush_if_ready()
-            self._cv.wait_for(lambda: "out" in slot)
-        if isinstance(slot["out"], BaseException):
-            raise slot["out"]
-        return slot["out"]
-
-    def _flush_if_ready(self):
-        if not self._pending or len(self._pending) < self._active:
-            return
-        slots, self._pending = self._pending, []
-        groups = {}   # requests with the same tolerances share a batch
-        for s in slots:
-            st = s["request"][2]
-            groups.setdefault((st.rtol, st.atol, st.method, st.max_steps), []).append(s)
-        for group in groups.values():
-            try:
-                outs = integrate_requests([s["request"] for s in group])
-            except Exception as exc:   # a bad request: every job waiting on this batch gets the error
-                outs = [exc] * len(group)
-            for s, o in zip(group, outs):
-                s["out"] = o
-        self._cv.notify_all()
-
-
-_LOCKSTEP = threading.local()   # .current: the Lockstep the thread's job runs under, if any
-
 

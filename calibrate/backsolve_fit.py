@@ -1,7 +1,10 @@
-r"""Route 1: back-solve Eq. 4 on the smoothed DEM fabric, then fit the laws to alpha(X) and mu(X).
+r"""The back-solve route (the tables' ``backsolve``, once "route 1"): Eq. 4 back-solved, the laws fitted.
 
-``run_route1`` chains ``backsolve.binned`` and the fits of ``fits``; it needs
-no integration of the model, so the bootstrap over seeds repeats it cheaply.
+The models are fitted to alpha(X) back-solved from the smoothed DEM fabric
+(``backsolve.binned``, Eq. 4), the friction laws to the samples' mu(X) (the
+tables' ``mu_vs_X``: Eq. 2 and the quadratic law of [15]); ``fit_blocks`` chains
+both through the fits of ``fits``. No integration of the model is needed, so the
+bootstrap over seeds repeats it cheaply.
 """
 from __future__ import annotations
 
@@ -37,23 +40,21 @@ def mu_noise(samples):
     return max(float(1.4826 * np.median(np.abs(s - np.median(s)))), 1e-4)
 
 
-def fit_friction(samples, steady, settings=backsolve.BacksolveSettings(), steady_weight=1.0) -> dict:
-    """Fit Eq. 2 and the quadratic law of [15] to the samples' mu(X).
+def fit_friction(samples, steady, sigma_mu: float, settings: backsolve.BacksolveSettings,
+                 steady_weight: float) -> dict:
+    """Fit Eq. 2 and the quadratic law of [15] to the samples' mu(X), each sample weighted by ``sigma_mu``.
 
     Returns
     -------
     dict
-        ``friction_eq2``, ``friction_quadratic`` (``fits.FitResult``) and
-        ``sigma_mu``, the per-sample friction noise they are weighted by (``mu_noise``).
+        ``friction_eq2``, ``friction_quadratic`` (``fits.FitResult``).
     """
     X, mu = friction_data(samples, settings)
-    sigma_mu = mu_noise(samples)
-    return {"sigma_mu": sigma_mu,
-            "friction_eq2": fits.fit_eq2(X, mu, sigma_mu, steady, steady_weight),
+    return {"friction_eq2": fits.fit_eq2(X, mu, sigma_mu, steady, steady_weight),
             "friction_quadratic": fits.fit_quadratic(X, mu, sigma_mu, steady, steady_weight)}
 
 
-def fit_coefficients(samples, steady, settings=backsolve.BacksolveSettings(), steady_weight=1.0, xc_margin=2e-3,
+def fit_coefficients(samples, steady, settings: backsolve.BacksolveSettings, steady_weight: float, xc_margin: float,
                      model1_start=None) -> dict:
     """Back-solve alpha1, alpha2 in bins of X and fit Model 1 (Eq. 6) and Model 2 (Eq. 5) to them.
 
@@ -68,16 +69,17 @@ def fit_coefficients(samples, steady, settings=backsolve.BacksolveSettings(), st
             "model2": fits.fit_model2(bins, steady, steady_weight)}
 
 
-def run_route1(samples, steady, settings=backsolve.BacksolveSettings(), steady_weight=1.0, xc_margin=2e-3,
-               model1_start=None):
+def fit_blocks(samples, steady, settings: backsolve.BacksolveSettings, steady_weight: float, xc_margin: float,
+               model1_start=None) -> dict:
     """Back-solve and fit every block: ``fit_friction`` and ``fit_coefficients`` together.
 
     Returns
     -------
     dict
         ``bins`` (DataFrame), ``friction_eq2``, ``friction_quadratic``, ``model1``,
-        ``model2`` (``fits.FitResult``), ``sigma_mu``.
+        ``model2`` (``fits.FitResult``), ``sigma_mu`` (the samples' friction noise, ``mu_noise``).
     """
-    out = fit_friction(samples, steady, settings, steady_weight)
+    sigma_mu = mu_noise(samples)
+    out = {"sigma_mu": sigma_mu, **fit_friction(samples, steady, sigma_mu, settings, steady_weight)}
     out.update(fit_coefficients(samples, steady, settings, steady_weight, xc_margin, model1_start))
     return out
