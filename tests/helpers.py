@@ -184,6 +184,40 @@ def assert_resumed_without_gap_or_duplicate(cdir):
     return s, side
 
 
+def assert_schedule_reversals(cdir, name, segments):
+    """The schedule ``name`` of ``cdir``, run from its pre-shear with ``segments`` (each segment's
+    direction differing from the one before it), whichever engine ran it: one series through the
+    contract's reader; the sidecar's reversals in order, at the scheduled strains (strain at the
+    nominal rate) within one step; the readers find them from the rate alone, within one sampling
+    interval (the rate turns at a sharp reversal, half way through a half cosine)."""
+    from dem_contract import read_series, split_transients
+
+    side = json.loads((Path(cdir) / f"{name}.json").read_text())
+    pre, run = read_series(Path(cdir) / "preshear.csv"), read_series(Path(cdir) / f"{name}.csv")
+    directions = [seg["direction"] for seg in segments]
+    assert side["samples"] == len(run)
+    assert [r["direction"] for r in side["reversals"]] == directions
+    assert [r["transition"] for r in side["reversals"]] == [s.get("transition", "heaviside") for s in segments]
+    assert (side["reversal_t"], side["reversal_strain"]) == (side["reversals"][0]["t"], side["reversals"][0]["strain"])
+    I, step = side["inertial_number"], side["gammadot_nominal"] * side["dt"]
+    scheduled = np.cumsum([0.0] + [s["strain"] for s in segments[:-1]])
+    assert np.abs((np.array([r["t"] for r in side["reversals"]]) - side["t_start"]) * I - scheduled).max() <= step * 1.001
+    fine = make_scene()["sampling"]["fine_interval"]
+    found = split_transients(pre, run)
+    assert len(found) == len(segments)
+    for tr, r in zip(found, side["reversals"]):
+        t_turn = r["t"] + 0.5 * r.get("transition_strain", 0.0) / I
+        assert abs(tr.t0 - t_turn) * I <= fine * 1.001 + step
+        if r["transition"] == "heaviside":
+            assert abs(tr.strain0 - r["strain"]) <= 1.1 * fine
+    assert [tr.sign for tr in found] == [float(d) for d in directions]
+    stated = split_transients(pre, run, side)
+    assert [t.t0 for t in stated] == [r["t"] for r in side["reversals"]]
+    # the rate: the first segment's direction at the start, the last one's at the end
+    assert np.sign(run["gammadot"].iloc[0]) == directions[0] and np.sign(run["gammadot"].iloc[-1]) == directions[-1]
+    return side, run
+
+
 # --- model-made data -----------------------------------------------------------------------
 
 #: Model 1 coefficients the calibration round trips recover (Eq. 6; tests/test_calibrate_roundtrip.py).

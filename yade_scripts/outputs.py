@@ -11,6 +11,7 @@ import yade
 from yade.wrapper import Omega
 
 import measure
+import protocol
 from checkpoint import atomic_json, save_state
 
 O = Omega()
@@ -87,13 +88,5 @@ class Outputs:
                        kappa_achieved=der["kn"] / (p_mean * p * d),
                        inertial_number_achieved=(st["sum_gd"] / n_p) / math.sqrt(p_mean),
                        gap_mean=st.get("sum_gap", math.nan) / n_p)
-            if self.stage in ("heaviside", "sinusoidal"):
-                out.update(reversal_strain=st["strain_start"], reversal_t=st["t_start"])
-            elif self.stage != "preshear":   # a schedule: every reversal, the first also as reversal_strain, _t
-                out.update(reversal_strain=st["reversals"][0]["strain"], reversal_t=st["reversals"][0]["t"],
-                           reversals=st["reversals"], segments=[
-                               {k: v for k, v in seg.items() if k not in ("start", "n_transition")}
-                               for seg in st["segments"]])
-            if self.stage == "sinusoidal":
-                out["transition_steps"] = st["n_transition"]
+            out.update(protocol.sidecar_keys(self.stage, st))
         return out
