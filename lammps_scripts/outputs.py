@@ -13,6 +13,7 @@ import time
 
 import contact
 import measure
+import protocol
 from atomicfile import atomic_json
 from rows import overlap_stats
 from shearing import STATE_SUFFIX
@@ -82,6 +83,5 @@ class Outputs:
                        kappa_achieved=der["kn"] / (p_mean * p * d),
                        inertial_number_achieved=(st["sum_gd"] / n_p) / math.sqrt(p_mean),
                        gap_mean=st["sum_gap"] / n_p)
-            if self.stage == "heaviside":
-                out.update(reversal_strain=st["strain_start"], reversal_t=st["t_start"])
+            out.update(protocol.sidecar_keys(self.stage, st))
         return out

@@ -1,14 +1,15 @@
-"""The LAMMPS stages and their controller: pack, preshear, heaviside of the wall cell.
+"""The LAMMPS stages and their controller: pack, preshear and every reversal stage of the wall cell.
 
 One controller per process, the class Stage, split by concern into one mixin per module as in
 yade_scripts/: packing (the pack's phases), shearing (the previous state, the walls' speeds),
 sampling (rows, guards, progress), outputs (final files, sidecar); this module holds the start
 and the run loop. LAMMPS runs between samples (`run n`, `pre no` unless a fix, the pair style
-or the load changed since the last run, whose setup LAMMPS then needs); Python samples between
-runs: one CSV row, the guards, progress.
+or the load changed since the last run, whose setup LAMMPS then needs), cut at a reversal
+stage's segment boundaries and one step at a time through a half cosine (shearing.py); Python
+samples between runs: one CSV row, the guards, progress.
 
 Not yet (docs/scene.md, "The LAMMPS engine"): checkpoints and resume (a stage killed is run
-again from its start), the sinusoidal reversal and reversal schedules, the periodic cell.
+again from its start), the periodic cell.
 """
 import os
 import shutil
@@ -81,6 +82,7 @@ class Stage(Packing, Shearing, Sampling, Outputs):
         w = measure.walls(measure.Snapshot(self.lmp, self.lay, der["W"]))
         st["x_rel"], st["gap"] = w["x_top"] - w["x_bot"], w["y_top"] - w["y_bot"]
         st["last_sample_iter"] = st["iter0"]
+        st["period"] = st["every"]
         self.csv = open(self.csv_path, "w")
         self.csv.write(",".join(self.columns()) + "\n")
         self.t_wall0, self.cpu0 = time.time(), time.process_time()
@@ -94,15 +96,28 @@ class Stage(Packing, Shearing, Sampling, Outputs):
         self.setup_needed = False
 
     def run(self, lock=None):
-        """Step to the end, one sample at a time; `lock.touch()` after every sample (run_stage)."""
+        """Step to the end; `lock.touch()` after every run (run_stage).
+
+        A run ends at the next sample (every st['period'] steps since the last one), at the next
+        segment's start (a reversal stage's boundary, where `enter_segment` turns the walls) or
+        after one step inside a half cosine (whose speed is set after every step)."""
         st = self.st
         while not self.done:
             done = self.step() - st["iter0"]
             if done >= st["n_steps"]:
                 break
-            n = min(st["n_steps"] - done, st["last_sample_iter"] + st["every"] - self.step())
-            self.run_steps(max(1, n))
-            self.sample()
+            transition = self.in_transition()
+            n = min(st["n_steps"] - done, st["last_sample_iter"] + st["period"] - self.step())
+            boundary = self.next_boundary()
+            if boundary is not None:
+                n = min(n, boundary - done)
+            self.run_steps(1 if transition else max(1, n))
+            if transition:
+                self.follow_transition()
+            if self.step() >= st["last_sample_iter"] + st["period"]:
+                self.sample()
+            while (boundary := self.next_boundary()) is not None and self.step() - st["iter0"] >= boundary:
+                self.enter_segment(st["segment"] + 1)
             if lock is not None:
                 lock.touch()
         if self.stage == "pack" and not self.done:
