@@ -12,7 +12,8 @@ from yade.wrapper import Omega
 
 import measure
 import protocol
-from checkpoint import atomic_json, save_state
+import workfiles
+from checkpoint import CHECKPOINTS, save_state
 
 O = Omega()
 
@@ -20,8 +21,7 @@ O = Omega()
 class Outputs:
     def finish(self):
         st = self.st
-        self.csv.flush()
-        os.fsync(self.csv.fileno())
+        workfiles.sync(self.csv)
         self.csv.close()
         st["wall_time"] += time.time() - self.t_wall0
         st["cpu_time"] = st.get("cpu_time", 0.0) + time.process_time() - self.cpu0
@@ -29,9 +29,7 @@ class Outputs:
         final_tmp = os.path.join(self.partial, "final.yade.gz")
         save_state(final_tmp)
         side = self.sidecar()
-        os.replace(final_tmp, os.path.join(self.case_dir, f"{self.stage}.final.yade.gz"))
-        os.replace(self.csv_path, os.path.join(self.case_dir, f"{self.stage}.csv"))
-        atomic_json(os.path.join(self.case_dir, f"{self.stage}.json"), side)
+        workfiles.publish(self.case_dir, self.stage, final_tmp, ".final.yade.gz", self.csv_path, side)
         self._remove_work_files()
         print(f"[{self.stage}] done: {st['rows']} samples, {O.iter - st['iter0']} steps, "
               f"{side['wall_time_s']:.1f} s, {side['particle_steps_per_s']:.3g} particle-steps/s", flush=True)
@@ -42,7 +40,7 @@ class Outputs:
         Own files: the checkpoints, resume.json and the temporary saves of save_state
         (`tmp<pid>_*.yade.gz`, left behind only by a process killed while saving).
         """
-        names = ["ckpt_a.yade.gz", "ckpt_b.yade.gz", "resume.json", "resume.json.tmp"]
+        names = [*CHECKPOINTS, workfiles.RESUME, workfiles.RESUME + ".tmp"]
         names += [n for n in os.listdir(self.partial) if re.fullmatch(r"tmp\d+_.*\.yade\.gz", n)]
         for name in names:
             try:

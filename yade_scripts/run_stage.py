@@ -40,7 +40,7 @@ def run(scene, sha, stage, case_dir, renew):
         return 2
     import stages  # YADE imports only once the scene is known to be good and the stage is ours
 
-    stages.install_signal_handlers()
+    stagecli.install_signal_handlers()
 
     def work():
         st = stages.Stage(scene, sha, stage, case_dir)

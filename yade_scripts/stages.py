@@ -19,13 +19,12 @@ The run loop advances the simulation in chunks of about CHUNK_S of wall time
 (`O.run(n)` stops after a whole step; runwait waits for it), cut at segment boundaries and at the
 reload points (every checkpoint.RELOAD_EVERY steps), where the state is reloaded
 and a checkpoint, if asked for, written. SIGTERM and SIGINT (see
-`install_signal_handlers`) only record themselves, whenever Python runs the handler
+`stagecli.install_signal_handlers`) only record themselves, whenever Python runs the handler
 (during runwait's sleeps too), and are acted on at the end of the current chunk: the stage
 goes back to the last reload point, checkpoints it and raises Interrupted (exit
 code 4). Checkpoints are never written inside a step.
 """
 import os
-import signal
 import time
 
 from yade.wrapper import Omega
@@ -38,27 +37,12 @@ from outputs import Outputs
 from packing import Packing
 from sampling import Sampling
 from shearing import Shearing
-from stageerrors import GuardError, InputError, Interrupted  # noqa: F401  (run_stage's exit codes)
+from stagecli import SIGNALS, interrupted
+from stageerrors import GuardError, InputError  # noqa: F401  (run_stage's exit codes)
 
 O = Omega()
 
 CHUNK_S = 1.0  # wall time of one O.run chunk: the longest wait between a signal and its checkpoint
-SIGNALS = []  # (signal number, time.time() when Python ran the handler) of each SIGTERM/SIGINT
-
-
-def _on_signal(signum, frame):
-    SIGNALS.append((signum, time.time()))
-
-
-def install_signal_handlers():
-    """SIGTERM and SIGINT only record themselves; the run loop checkpoints and stops.
-
-    A SIGINT ignored by the parent (a background job of a non-interactive shell)
-    stays ignored.
-    """
-    signal.signal(signal.SIGTERM, _on_signal)
-    if signal.getsignal(signal.SIGINT) is not signal.SIG_IGN:
-        signal.signal(signal.SIGINT, _on_signal)
 
 
 class Stage(Packing, Shearing, Sampling, Checkpoints, Outputs):
@@ -150,6 +134,4 @@ class Stage(Packing, Shearing, Sampling, Checkpoints, Outputs):
         same bit, by the resumed run."""
         self.rewind()
         self.checkpoint()
-        name = signal.Signals(SIGNALS[0][0]).name
-        raise Interrupted(f"{name} received: checkpoint at iteration {O.iter} ({self.st['rows']} rows) "
-                          f"written in {self.partial}; run the same command again to resume")
+        raise interrupted(f"iteration {O.iter}", self.st["rows"], self.partial)
