@@ -1,20 +1,19 @@
 """A completed LAMMPS stage's outputs: the final state (a LAMMPS restart file), the CSV and the
-sidecar, renamed into `<case_dir>` at once, then the work files removed. A mixin of stages.Stage.
+sidecar, renamed into `<case_dir>` at once (workfiles.publish), then the work files (checkpoints,
+resume.json, the grid file, LAMMPS's log) removed. A mixin of stages.Stage.
 
 The sidecar has every key of yade_scripts' (docs/data-contract.md): `engines` lists the LAMMPS
 pair style and fixes, `lammps_version` stands for `yade_version`; `engine` is "lammps", and
 `engine_state` carries what the next stage starts from (layout, time origin, strain, dt).
 """
-import json
 import math
 import os
 import shutil
-import time
 
 import contact
 import measure
 import protocol
-from atomicfile import atomic_json
+import workfiles
 from rows import overlap_stats
 from shearing import STATE_SUFFIX
 
@@ -22,17 +21,13 @@ from shearing import STATE_SUFFIX
 class Outputs:
     def finish(self):
         st = self.st
-        self.csv.flush()
-        os.fsync(self.csv.fileno())
+        workfiles.sync(self.csv)
         self.csv.close()
-        st["wall_time"] = time.time() - self.t_wall0
-        st["cpu_time"] = time.process_time() - self.cpu0
+        self.account_time()
         final_tmp = os.path.join(self.partial, "final.lammps")
         self.lmp.command(f"write_restart {final_tmp}")
         side = self.sidecar()
-        os.replace(final_tmp, os.path.join(self.case_dir, self.stage + STATE_SUFFIX))
-        os.replace(self.csv_path, os.path.join(self.case_dir, f"{self.stage}.csv"))
-        atomic_json(os.path.join(self.case_dir, f"{self.stage}.json"), side)
+        workfiles.publish(self.case_dir, self.stage, final_tmp, STATE_SUFFIX, self.csv_path, side)
         self.close()
         shutil.rmtree(self.partial, ignore_errors=True)
         print(f"[{self.stage}] done: {st['rows']} samples, {side['steps']} steps, "

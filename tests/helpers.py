@@ -137,13 +137,14 @@ def assert_pack_restored_the_grains_own_friction_and_damping(case, tmp_path):
     assert all(got["wall_damped"])
 
 
-def kill_preshear_after_first_checkpoint(scene, cdir, stage="preshear", ready=None, log=None):
+def kill_preshear_after_first_checkpoint(scene, cdir, stage="preshear", ready=None, log=None, runner=RUN):
     """Start the pre-shear (or ``stage``) of ``cdir``, SIGKILL it 0.7 s after its first checkpoint
     (its first for which ``ready(resume.json's dict)`` is true, if given); return its PID. With ``log``,
-    the stage writes its log there (run_stage.py --log, as the workflow runs it)."""
+    the stage writes its log there (run_stage.py --log, as the workflow runs it). ``runner``: the
+    engine's run_stage.py (YADE's, or LAMMPS_RUN)."""
     resume = Path(cdir) / ".partial" / stage / "resume.json"
     env = dict(os.environ, OMP_NUM_THREADS="1")
-    proc = subprocess.Popen(command(RUN, scene, stage, cdir, *(["--log", log] if log else [])),
+    proc = subprocess.Popen(command(runner, scene, stage, cdir, *(["--log", log] if log else [])),
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
 
     def checkpointed():
