@@ -35,18 +35,8 @@ def run(scene, sha, stage, case_dir, renew):
     except ImportError as e:
         print(f"LAMMPS not found: {e}", file=sys.stderr)
         return 2
-    stagecli.install_signal_handlers()
-    st = stages.Stage(scene, sha, stage, case_dir)
-
-    def work():
-        try:
-            st.prepare()
-            st.run(renew)
-        finally:
-            st.close()
-
     try:
-        return stagecli.exit_code(work)
+        return stagecli.run_stage(stages.Stage(scene, sha, stage, case_dir), renew)
     except lammpslib.LammpsNotFound as e:
         print(f"LAMMPS not found: {e}", file=sys.stderr)
         return 2
@@ -58,13 +48,4 @@ if __name__ == "__main__":
     except lammpslib.LammpsNotFound as e:
         print(f"LAMMPS not found: {e}", file=sys.stderr)
         sys.exit(2)
-    try:
-        rc = stagecli.main(sys.argv[1:], "lammps", run)
-    except Exception:  # exit code 1, with the traceback (in the log once it is open)
-        import traceback
-
-        traceback.print_exc()
-        rc = 1
-    sys.stdout.flush()
-    sys.stderr.flush()
-    os._exit(rc)
+    stagecli.leave(lambda: stagecli.main(sys.argv[1:], "lammps", run))

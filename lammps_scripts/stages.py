@@ -19,12 +19,10 @@ import time
 import cell
 import lammpslib
 import measure
-import scene as scenemod
 import workfiles
 from checkpoint import Checkpoints
 from outputs import Outputs
 from packing import Packing
-from rows import COLUMNS, PACK_COLUMNS
 from sampling import Sampling
 from shearing import Shearing
 from stageerrors import GuardError, InputError  # noqa: F401  (run_stage's exit codes)
@@ -32,21 +30,14 @@ from stageerrors import GuardError, InputError  # noqa: F401  (run_stage's exit 
 STAGES = ("pack", "preshear", "heaviside")  # what lammps_scripts runs (pre-flight: preflight/checks.py)
 
 
-class Stage(Packing, Shearing, Sampling, Checkpoints, Outputs):
+class Stage(workfiles.StageFiles, Packing, Shearing, Sampling, Checkpoints, Outputs):
     def __init__(self, scene, scene_hash, stage, case_dir):
-        self.scene, self.hash, self.stage, self.case_dir = scene, scene_hash, stage, case_dir
-        self.der = scenemod.derived(scene)
-        self.partial = os.path.join(case_dir, ".partial", stage)
-        self.csv_path = os.path.join(self.partial, f"{stage}.csv")
-        self.done = False
+        super().__init__(scene, scene_hash, stage, case_dir)
         self.setup_needed = True
         self.drag = None
         self.lmp = None
         self.grid = None  # the last grid point's st (json), until it is a checkpoint (checkpoint.py)
         self.checkpoint_name = None
-
-    def columns(self):
-        return COLUMNS + (PACK_COLUMNS if self.stage == "pack" else [])
 
     def step(self):
         return int(self.lmp.extract_global("ntimestep"))
@@ -82,13 +73,7 @@ class Stage(Packing, Shearing, Sampling, Checkpoints, Outputs):
         """The cell or the previous stage's state, the stage's plan, the contact law, computes,
         fixes and the walls' speeds; the forces of the start; the CSV's header."""
         der = self.der
-        st = dict(stage=self.stage, rows=0, sum_p=0.0, sum_gd=0.0, sum_gap=0.0, n_acc=0, window=[], pack_ok=0,
-                  resumed=0, scene_sha256=self.hash, wall_time=0.0, cpu_time=0.0)
-        self.st = st
-        steps_per_strain = 1.0 / (der["gammadot"] * der["dt"])
-        smp = self.scene["sampling"]
-        st["fine_every"] = max(1, int(round(smp["fine_interval"] * steps_per_strain)))
-        st["coarse_every"] = max(st["fine_every"], int(round(smp["coarse_interval"] * steps_per_strain)))
+        st, steps_per_strain = self.fresh_state()
         if self.stage == "pack":
             self.start_pack(st)
         else:
