@@ -54,11 +54,13 @@ paper: setup
 
 # Benchmarks of the code's own speed, in no preset's study: the batched integrator against a
 # loop of model.simulate (about a minute) and every calibration set of the quick campaign with
-# the per-run and the batched integrator (about 11 minutes of one core), and the DEM stage
-# against bare YADE (4 paired runs of a 338-disk pre-shear, about 5 minutes of one core); the
+# the per-run and the batched integrator (about 11 minutes of one core), the DEM stage
+# against bare YADE (4 paired runs of a 338-disk pre-shear, about 5 minutes of one core), and
+# LAMMPS's stage against YADE's (tools/engine_benchmark.py: paired pre-shears at 626 and about
+# 5,000 disks, bare LAMMPS on 1 and 2 MPI ranks; its packings dominate, about 15 minutes); the
 # quick campaign's DEM and calibration run first where results/ lacks them.
-BENCH := results/accuracy/batched_cost.csv results/accuracy/calibration_cost.csv results/accuracy/stage_overhead.csv
-bench: setup
+BENCH := results/accuracy/batched_cost.csv results/accuracy/calibration_cost.csv results/accuracy/stage_overhead.csv results/accuracy/engine_throughput.csv
+bench: setup lammps
 	$(PREFLIGHT) config/quick.yaml
 	$(VENV)/bin/snakemake -j2 $(BENCH) --configfile config/quick.yaml
 

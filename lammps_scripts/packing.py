@@ -1,11 +1,13 @@
 """The pack stage's phases in LAMMPS: compression, ramp, settling (docs/scene.md, Packing).
 
-A mixin of stages.Stage, the same phases and criteria as yade_scripts/packing.py; the grains'
-Cundall damping of the ramp and the settling is a viscous drag here (cell.set_grain_damping).
+A mixin of stages.Stage: the phases and their criteria are yade_scripts/packphases.py's, shared with
+YADE's stage; this module does what entering a phase does in LAMMPS. The grains' Cundall damping of
+the ramp and the settling is a viscous drag here (cell.set_grain_damping).
 """
 import math
 
 import cell
+import packphases
 import placement
 from stageerrors import InputError
 
@@ -20,16 +22,11 @@ class Packing:
             raise InputError(str(e))
         st.update(dt=der["dt"], t_origin=0.0, strain=0.0, iter0=0, phase="compress", phase_steps={},
                   load=sc["pack"]["compaction_pressure"] * der["p"] * der["W"] * der["d"])
-        st["friction"] = self.pack_friction()
-        st["damping"] = 0.0
+        st["friction"] = packphases.friction(sc, "compress")
+        st["damping"] = packphases.damping(sc, "compress")
         st["every"] = max(1, int(round(sc["pack"]["check_interval"] * der["T0"] / der["dt"])))
         st["n_steps"] = int(math.ceil(sc["pack"]["max_time"] * der["T0"] / der["dt"]))
         st["fine_end"] = 0
-
-    def pack_friction(self):
-        """pack.friction, or material.friction if it is null."""
-        mu = self.scene["pack"]["friction"]
-        return self.scene["material"]["friction"] if mu is None else mu
 
     def ke_mean(self, snap):
         """Mean squared grain velocity (translation) in p/rho."""
@@ -37,50 +34,35 @@ class Packing:
         return float((v**2).sum()) / self.lay["N"] / self.der["V0"] ** 2
 
     def enter(self, phase):
-        """Start pack phase ``phase``; the steps of the phase that ends go to st['phase_steps'].
-        The grains are damped (pack.damping) in the ramp and the settling only."""
-        st = self.st
-        ps = st["phase_steps"]
-        ps[st["phase"]] = self.step() - st["iter0"] - sum(ps.values())
-        st["phase"] = phase
-        damped = phase in ("ramp", "settle")
-        st["damping"] = self.scene["pack"]["damping"] if damped else 0.0
+        """What entering pack phase ``phase`` (packphases.check) does in LAMMPS: the grains' drag of
+        its damping; the settling: the grains' friction back to material.friction (the pair style's
+        settings: LAMMPS's setup before the next run) and, with pack.quench, the grains at rest;
+        done: the stage ends."""
+        st, sc = self.st, self.scene
+        st["damping"] = packphases.damping(sc, phase)
         self.apply_damping()
+        if phase == "settle":
+            st["friction"] = packphases.friction(sc, phase)
+            cell.set_friction(self.lmp, sc, self.der, st["friction"])
+            self.setup_needed = True
+            if sc["pack"]["quench"]:
+                cell.quench_grains(self.lmp)
+        if phase == "done":
+            self.done = True
 
     def apply_damping(self):
-        """The grains' drag of the current phase: gamma = damping sqrt(kn m_d) (cell.set_grain_damping)."""
+        """The grains' drag of st's damping: gamma = damping sqrt(kn m_d) (cell.set_grain_damping)."""
         gamma = self.st["damping"] * math.sqrt(self.der["kn"] * self.der["m_d"])
         self.drag = cell.set_grain_damping(self.lmp, gamma)
         self.setup_needed = True
 
     def pack_control(self, ke, wall_speed, pw):
-        """compress -> ramp -> settle -> done, as yade_scripts/packing.Packing._pack_control."""
-        st, pk, der = self.st, self.scene["pack"], self.der
-        full = der["p"] * der["W"] * der["d"]
-        settled = ke < pk["ke_max"] and wall_speed < pk["wall_speed_max"]
-        t = self.time()
-        if st["phase"] == "compress" and wall_speed < pk["wall_speed_max"] and ke < 100 * pk["ke_max"]:
-            self.enter("ramp")
-            st["ramp_start"] = t
-            print(f"[pack] jammed at the compaction load, t = {t / der['T0']:.1f}: ramping to p", flush=True)
-        if st["phase"] == "ramp":
-            f0 = pk["compaction_pressure"] * full
-            ramp = pk["ramp_time"] * der["T0"]
-            x = min(1.0, (t - st["ramp_start"]) / ramp) if ramp > 0 else 1.0
-            st["load"] = f0 + (full - f0) * x
+        """One check of the pack's phases (packphases.check), the phases entered acted on, the
+        ramp's load set."""
+        st = self.st
+        load = st["load"]
+        for phase in packphases.check(st, self.scene, self.der, self.time(), self.step() - st["iter0"], ke,
+                                      wall_speed, pw):
+            self.enter(phase)
+        if st["load"] != load:
             cell.set_wall_load(self.lmp, st["load"], self.lay["n_wall"])
-            if x >= 1.0:
-                self.enter("settle")
-                st["pack_ok"] = 0
-                st["friction"] = self.scene["material"]["friction"]
-                cell.set_friction(self.lmp, self.scene, der, st["friction"])
-                self.setup_needed = True  # a new pair style's settings: LAMMPS's setup before the next run
-                if pk["quench"]:
-                    cell.quench_grains(self.lmp)
-        elif st["phase"] == "settle":
-            ok = settled and abs(pw - 1) < pk["pressure_tolerance"]
-            st["pack_ok"] = st["pack_ok"] + 1 if ok else 0
-            if st["pack_ok"] >= 2:
-                st["converged_at_t"] = t / der["T0"]
-                self.enter("done")
-                self.done = True

@@ -9,8 +9,9 @@ LAMMPS is loaded as a library (lammpslib) by the interpreter Debian's `python3-l
 installed for: any `python3` may start the script, it runs itself again under that one.
 Exit codes: 0 done, 1 unexpected error (a LAMMPS error ends the process with code 1 too:
 Debian's library is built without exceptions; its message is in
-`<case_dir>/.partial/<stage>/log.lammps`), 2 bad scene, missing input, a stage or setting this
-engine does not run, or LAMMPS not found, 3 guard fired, 5 another live process runs this stage.
+`<case_dir>/.partial/<stage>/log.lammps`), 2 bad scene, missing input, a setting this engine
+does not run, or LAMMPS not found, 3 guard fired, 4 interrupted by SIGTERM or SIGINT (checkpoint
+written: rerun to resume, checkpoint.py), 5 another live process runs this stage.
 """
 import os
 import sys
@@ -34,17 +35,8 @@ def run(scene, sha, stage, case_dir, renew):
     except ImportError as e:
         print(f"LAMMPS not found: {e}", file=sys.stderr)
         return 2
-    st = stages.Stage(scene, sha, stage, case_dir)
-
-    def work():
-        try:
-            st.prepare()
-            st.run(renew)
-        finally:
-            st.close()
-
     try:
-        return stagecli.exit_code(work)
+        return stagecli.run_stage(stages.Stage(scene, sha, stage, case_dir), renew)
     except lammpslib.LammpsNotFound as e:
         print(f"LAMMPS not found: {e}", file=sys.stderr)
         return 2
@@ -56,13 +48,4 @@ if __name__ == "__main__":
     except lammpslib.LammpsNotFound as e:
         print(f"LAMMPS not found: {e}", file=sys.stderr)
         sys.exit(2)
-    try:
-        rc = stagecli.main(sys.argv[1:], "lammps", run)
-    except Exception:  # exit code 1, with the traceback (in the log once it is open)
-        import traceback
-
-        traceback.print_exc()
-        rc = 1
-    sys.stdout.flush()
-    sys.stderr.flush()
-    os._exit(rc)
+    stagecli.leave(lambda: stagecli.main(sys.argv[1:], "lammps", run))

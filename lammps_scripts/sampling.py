@@ -42,7 +42,7 @@ class Sampling:
             st["sum_gd"] += abs(gd) * der["T0"]
             st["n_acc"] += 1
             if it >= st["fine_end"]:
-                st["every"] = st["coarse_every"]
+                st["period"] = st["coarse_every"]
         now = time.time()
         if now - self.last_progress >= sc["run"]["progress_every_s"]:
             self.progress(now)

@@ -381,17 +381,16 @@ def scene_problems(config: dict, root=ROOT) -> list[str]:
 
 
 def engine_problems(config: dict, root=ROOT) -> list[str]:
-    """With ``engine: lammps``, what lammps_scripts does not run yet (lammps_scripts/refusals.py), by key:
-    protocols other than its stages, the bulk-vs-walls study, and every scene setting it refuses."""
+    """With ``engine: lammps``, what lammps_scripts does not run (lammps_scripts/refusals.py), by key:
+    the bulk-vs-walls study (its periodic cells) and every scene setting it refuses. Every protocol
+    runs (heaviside, sinusoidal, every schedule and train)."""
     engine = config.get("engine", "yade")
     if engine != "lammps":
         return []
     mod = lammps_refusals(root)
-    out = [problem(f"protocols.{name}", None, "the lammps engine does not run this protocol yet (it runs "
-                   f"{', '.join(mod.SUPPORTED_STAGES)})", "heaviside, or engine: yade", shown="{...}")
-           for name in config["protocols"] if name not in mod.SUPPORTED_STAGES]
+    out = []
     if ((config.get("accuracy") or {}).get("bulk_vs_walls") or {}).get("run", False):
-        out.append(problem("accuracy.bulk_vs_walls.run", True, "the bulk-vs-walls study's periodic cells and trains "
+        out.append(problem("accuracy.bulk_vs_walls.run", True, "the bulk-vs-walls study's periodic cells "
                            "run in yade only", "false, or engine: yade"))
     label, case = next(iter(cases(config).items()))
     for why in mod.refusals(scene_module(root).validate(scene_from_config(config, case, label))):

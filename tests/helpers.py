@@ -137,13 +137,14 @@ def assert_pack_restored_the_grains_own_friction_and_damping(case, tmp_path):
     assert all(got["wall_damped"])
 
 
-def kill_preshear_after_first_checkpoint(scene, cdir, stage="preshear", ready=None, log=None):
+def kill_preshear_after_first_checkpoint(scene, cdir, stage="preshear", ready=None, log=None, runner=RUN):
     """Start the pre-shear (or ``stage``) of ``cdir``, SIGKILL it 0.7 s after its first checkpoint
     (its first for which ``ready(resume.json's dict)`` is true, if given); return its PID. With ``log``,
-    the stage writes its log there (run_stage.py --log, as the workflow runs it)."""
+    the stage writes its log there (run_stage.py --log, as the workflow runs it). ``runner``: the
+    engine's run_stage.py (YADE's, or LAMMPS_RUN)."""
     resume = Path(cdir) / ".partial" / stage / "resume.json"
     env = dict(os.environ, OMP_NUM_THREADS="1")
-    proc = subprocess.Popen(command(RUN, scene, stage, cdir, *(["--log", log] if log else [])),
+    proc = subprocess.Popen(command(runner, scene, stage, cdir, *(["--log", log] if log else [])),
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
 
     def checkpointed():
@@ -182,6 +183,40 @@ def assert_resumed_without_gap_or_duplicate(cdir):
     dt_coarse = side["sampling_steps"]["coarse"] * side["dt"] / side["time_unit_s"]
     assert np.diff(t).max() <= dt_coarse * (1 + 1e-9)  # no gap: not even one step more than the grid
     return s, side
+
+
+def assert_schedule_reversals(cdir, name, segments):
+    """The schedule ``name`` of ``cdir``, run from its pre-shear with ``segments`` (each segment's
+    direction differing from the one before it), whichever engine ran it: one series through the
+    contract's reader; the sidecar's reversals in order, at the scheduled strains (strain at the
+    nominal rate) within one step; the readers find them from the rate alone, within one sampling
+    interval (the rate turns at a sharp reversal, half way through a half cosine)."""
+    from dem_contract import read_series, split_transients
+
+    side = json.loads((Path(cdir) / f"{name}.json").read_text())
+    pre, run = read_series(Path(cdir) / "preshear.csv"), read_series(Path(cdir) / f"{name}.csv")
+    directions = [seg["direction"] for seg in segments]
+    assert side["samples"] == len(run)
+    assert [r["direction"] for r in side["reversals"]] == directions
+    assert [r["transition"] for r in side["reversals"]] == [s.get("transition", "heaviside") for s in segments]
+    assert (side["reversal_t"], side["reversal_strain"]) == (side["reversals"][0]["t"], side["reversals"][0]["strain"])
+    I, step = side["inertial_number"], side["gammadot_nominal"] * side["dt"]
+    scheduled = np.cumsum([0.0] + [s["strain"] for s in segments[:-1]])
+    assert np.abs((np.array([r["t"] for r in side["reversals"]]) - side["t_start"]) * I - scheduled).max() <= step * 1.001
+    fine = make_scene()["sampling"]["fine_interval"]
+    found = split_transients(pre, run)
+    assert len(found) == len(segments)
+    for tr, r in zip(found, side["reversals"]):
+        t_turn = r["t"] + 0.5 * r.get("transition_strain", 0.0) / I
+        assert abs(tr.t0 - t_turn) * I <= fine * 1.001 + step
+        if r["transition"] == "heaviside":
+            assert abs(tr.strain0 - r["strain"]) <= 1.1 * fine
+    assert [tr.sign for tr in found] == [float(d) for d in directions]
+    stated = split_transients(pre, run, side)
+    assert [t.t0 for t in stated] == [r["t"] for r in side["reversals"]]
+    # the rate: the first segment's direction at the start, the last one's at the end
+    assert np.sign(run["gammadot"].iloc[0]) == directions[0] and np.sign(run["gammadot"].iloc[-1]) == directions[-1]
+    return side, run
 
 
 # --- model-made data -----------------------------------------------------------------------

@@ -17,7 +17,8 @@ from campaign.scene_spec import protocol_strain
 from dem_contract import (DEMInputError, pre_reversal_state, read_series, read_sidecar, split_transients,
                           synthetic)
 from model import default_params
-from tests.helpers import ROOT, RUN, kill_preshear_after_first_checkpoint, make_scene, read, yade, yade_module
+from tests.helpers import (ROOT, RUN, assert_schedule_reversals, kill_preshear_after_first_checkpoint, make_scene, read,
+                           yade, yade_module)
 
 scenemod = yade_module("scene")  # pure Python, no YADE
 
@@ -48,6 +49,36 @@ def test_a_schedule_and_a_train_expand_to_their_segments():
     # heaviside and sinusoidal are one-segment schedules
     assert scenemod.segments(scenemod.validate(TINY), "sinusoidal") == [
         {"strain": 0.3, "direction": -1, "transition": "half_cosine", "transition_strain": 0.1}]
+
+
+def test_the_protocol_cuts_segments_on_whole_steps_and_turns_the_walls_through_a_half_cosine():
+    """yade_scripts/protocol.py, which both engines' stages drive their walls with: segment starts at
+    ceil(strain x steps per strain), a reversal recorded with its kind, the old speed at the reversal,
+    the half cosine's speed after each of its n steps, then the new direction's."""
+    protocol = yade_module("protocol")
+    der = dict(U=2.0, dt=1e-3, gammadot=10.0)
+    segs = [{"strain": 0.2, "direction": -1, "transition": "heaviside"},
+            {"strain": 0.3, "direction": 1, "transition": "half_cosine", "transition_strain": 0.05}]
+    st = dict(iter0=100, strain=1.5, window=[[0.0, 1.0]])
+    protocol.plan(st, segs, 0.01, 100.0, 100)   # 100 steps per strain
+    assert [(s["start"], s["n_transition"]) for s in st["segments"]] == [(0, 0), (20, 5)]
+    assert (st["n_steps"], st["fine_window_steps"], st["fine_end"]) == (50, 1, 101)
+    assert protocol.enter(st, 0, 100, 7.0, der) == -2.0 and not protocol.in_transition(st, 100)
+    assert protocol.next_boundary(st) == 20 and protocol.reverses(st, 1)
+    st["strain"] = 1.3
+    assert protocol.enter(st, 1, 120, 9.0, der) == -2.0   # the half cosine starts at the old speed
+    assert st["reversals"] == [dict(strain=1.5, t=7.0, direction=-1, transition="heaviside"),
+                               dict(strain=1.3, t=9.0, direction=1, transition="half_cosine", transition_strain=0.05)]
+    assert st["window"] == [] and st["guard_from"] == pytest.approx(0.2) and st["fine_end"] == 126
+    assert protocol.next_boundary(st) is None
+    speeds = []
+    for it in range(120, 127):
+        if protocol.in_transition(st, it):
+            speeds.append(protocol.transition_speed(st, der, it + 1))
+    assert speeds == pytest.approx([-2.0 * np.cos(np.pi * k / 5) for k in range(1, 6)])
+    assert speeds[-1] == 2.0 and protocol.half_cosine_speed(2.0, 9, 5, -1, 1) == 2.0
+    assert protocol.sidecar_keys("double", st)["segments"] == segs
+    assert protocol.sidecar_keys("preshear", st) == {}
 
 
 @pytest.mark.parametrize("spec, key", [
@@ -254,32 +285,7 @@ def yade_schedule(request, tmp_path_factory, preshear_of):
 
 @pytest.mark.yade
 def test_a_schedule_with_two_reversals_writes_one_series_whose_reversals_the_readers_find(yade_schedule):
-    cdir, kind = yade_schedule["dir"], yade_schedule["kind"]
-    side = json.loads((cdir / "double.json").read_text())
-    pre, run = read_series(cdir / "preshear.csv"), read_series(cdir / "double.csv")   # the contract's checks pass
-    assert side["samples"] == len(run)
-    assert [r["direction"] for r in side["reversals"]] == [-1, 1]
-    assert [r["transition"] for r in side["reversals"]] == [s.get("transition", "heaviside") for s in SCHEDULES[kind]]
-    assert (side["reversal_t"], side["reversal_strain"]) == (side["reversals"][0]["t"], side["reversals"][0]["strain"])
-    # the sidecar's reversals at the scheduled strains (as strain at the nominal rate), within one step
-    I, step = side["inertial_number"], side["gammadot_nominal"] * side["dt"]
-    scheduled = np.cumsum([0.0] + [s["strain"] for s in SCHEDULES[kind][:-1]])
-    assert np.abs((np.array([r["t"] for r in side["reversals"]]) - side["t_start"]) * I - scheduled).max() <= step * 1.001
-    # the readers find them from the rate alone, within one sampling interval
-    fine = make_scene()["sampling"]["fine_interval"]
-    found = split_transients(pre, run)
-    assert len(found) == 2
-    for tr, r in zip(found, side["reversals"]):
-        # the rate turns at the reversal (sharp) or half way through the half cosine
-        t_turn = r["t"] + 0.5 * r.get("transition_strain", 0.0) / I
-        assert abs(tr.t0 - t_turn) * I <= fine * 1.001 + step
-        if r["transition"] == "heaviside":
-            assert abs(tr.strain0 - r["strain"]) <= 1.1 * fine
-    assert [tr.sign for tr in found] == [-1.0, 1.0]
-    stated = split_transients(pre, run, side)
-    assert [t.t0 for t in stated] == [r["t"] for r in side["reversals"]]
-    # the rate: against the pre-shear in the first segment, with it at the end
-    assert run["gammadot"].iloc[0] < 0 < run["gammadot"].iloc[-1]
+    assert_schedule_reversals(yade_schedule["dir"], "double", SCHEDULES[yade_schedule["kind"]])
 
 
 @pytest.mark.yade

@@ -24,12 +24,13 @@ import time
 
 import build
 import measure
-from atomicfile import atomic_json
+import workfiles
 from yade.wrapper import Omega
 
 O = Omega()
 RELOAD_EVERY = 10000  # steps between reloads (about 120 steps' cost each: ~1 %), the checkpoint grid
 SLOT = "ys_reload"  # the in-memory save (O.saveTmp) of the last reload point
+CHECKPOINTS = ("ckpt_a.yade.gz", "ckpt_b.yade.gz")  # written in turn
 
 
 def save_state(path):
@@ -53,16 +54,7 @@ def save_state(path):
 class Checkpoints:
     def prepare(self):
         os.makedirs(self.case_dir, exist_ok=True)
-        resume = None
-        if os.path.exists(self.resume_path):
-            with open(self.resume_path) as f:
-                resume = json.load(f)
-            if resume.get("scene_sha256") != self.hash:
-                print(f"[{self.stage}] partial run from another scene: discarded", flush=True)
-                resume = None
-            elif not self._csv_has_rows(resume["rows"]):
-                print(f"[{self.stage}] partial CSV shorter than its checkpoint: discarded", flush=True)
-                resume = None
+        resume = workfiles.resume_record(self.partial, self.csv_path, self.hash, self.stage)
         if resume is None:
             shutil.rmtree(self.partial, ignore_errors=True)  # this process owns the stage (see stagelock)
             os.makedirs(self.partial)
@@ -75,7 +67,7 @@ class Checkpoints:
             O.load(ck)
             self.st = json.loads(O.tags["ys_state"])
             self.st["resumed"] += 1
-            self._truncate_csv(self.st["rows"])
+            workfiles.truncate_csv(self.csv_path, self.st["rows"])
             print(f"[{self.stage}] resumed from {resume['checkpoint']} at iteration {O.iter}, "
                   f"strain {self.st['strain']:.5f}, {self.st['rows']} rows kept", flush=True)
         self.csv = open(self.csv_path, "a")
@@ -86,37 +78,19 @@ class Checkpoints:
         self.last_checkpoint = self.t_wall0
         self.reload()  # a fresh start too: a resume from this point sees the same state
 
-    def _csv_has_rows(self, rows):
-        if not os.path.isfile(self.csv_path):
-            return False
-        with open(self.csv_path) as f:
-            n = sum(1 for line in f if line.endswith("\n"))
-        return n >= rows + 1
-
-    def _truncate_csv(self, rows):
-        with open(self.csv_path) as f:
-            lines = f.readlines()
-        keep = lines[: rows + 1]
-        with open(self.csv_path, "w") as f:
-            f.writelines(keep)
-            f.flush()
-            os.fsync(f.fileno())
-
     def checkpoint(self):
         st = self.st
-        self.csv.flush()
-        os.fsync(self.csv.fileno())
+        workfiles.sync(self.csv)
         now = time.time()
         st["wall_time"] += now - self.t_wall0
         st["cpu_time"] = st.get("cpu_time", 0.0) + time.process_time() - self.cpu0
         self.cpu0 = time.process_time()
         self.t_wall0, self.iter_wall0 = now, O.iter
-        name = "ckpt_a.yade.gz" if st.get("ckpt") != "ckpt_a.yade.gz" else "ckpt_b.yade.gz"
+        name = workfiles.next_checkpoint(st.get("ckpt"), CHECKPOINTS)
         st["ckpt"] = name
         O.tags["ys_state"] = json.dumps(st)
         save_state(os.path.join(self.partial, name))
-        atomic_json(self.resume_path, dict(checkpoint=name, rows=st["rows"], iter=O.iter,
-                                            scene_sha256=self.hash))
+        workfiles.write_resume(self.partial, name, st["rows"], O.iter, self.hash)
         self.last_checkpoint = now
         print(f"[{self.stage}] checkpoint at iteration {O.iter} ({st['rows']} rows, "
               f"written in {time.time() - now:.2f} s)", flush=True)

@@ -2,7 +2,6 @@
 `<case_dir>` at once, then the work files removed. A mixin of stages.Stage.
 """
 import json
-import math
 import os
 import re
 import time
@@ -11,7 +10,8 @@ import yade
 from yade.wrapper import Omega
 
 import measure
-from checkpoint import atomic_json, save_state
+import workfiles
+from checkpoint import CHECKPOINTS, save_state
 
 O = Omega()
 
@@ -19,8 +19,7 @@ O = Omega()
 class Outputs:
     def finish(self):
         st = self.st
-        self.csv.flush()
-        os.fsync(self.csv.fileno())
+        workfiles.sync(self.csv)
         self.csv.close()
         st["wall_time"] += time.time() - self.t_wall0
         st["cpu_time"] = st.get("cpu_time", 0.0) + time.process_time() - self.cpu0
@@ -28,9 +27,7 @@ class Outputs:
         final_tmp = os.path.join(self.partial, "final.yade.gz")
         save_state(final_tmp)
         side = self.sidecar()
-        os.replace(final_tmp, os.path.join(self.case_dir, f"{self.stage}.final.yade.gz"))
-        os.replace(self.csv_path, os.path.join(self.case_dir, f"{self.stage}.csv"))
-        atomic_json(os.path.join(self.case_dir, f"{self.stage}.json"), side)
+        workfiles.publish(self.case_dir, self.stage, final_tmp, ".final.yade.gz", self.csv_path, side)
         self._remove_work_files()
         print(f"[{self.stage}] done: {st['rows']} samples, {O.iter - st['iter0']} steps, "
               f"{side['wall_time_s']:.1f} s, {side['particle_steps_per_s']:.3g} particle-steps/s", flush=True)
@@ -41,7 +38,7 @@ class Outputs:
         Own files: the checkpoints, resume.json and the temporary saves of save_state
         (`tmp<pid>_*.yade.gz`, left behind only by a process killed while saving).
         """
-        names = ["ckpt_a.yade.gz", "ckpt_b.yade.gz", "resume.json", "resume.json.tmp"]
+        names = [*CHECKPOINTS, workfiles.RESUME, workfiles.RESUME + ".tmp"]
         names += [n for n in os.listdir(self.partial) if re.fullmatch(r"tmp\d+_.*\.yade\.gz", n)]
         for name in names:
             try:
@@ -54,46 +51,14 @@ class Outputs:
             print(f"[{self.stage}] {self.partial} left in place: {e}", flush=True)
 
     def sidecar(self):
-        st, der, sc = self.st, self.der, self.scene
-        d, p, T0 = der["d"], der["p"], der["T0"]
+        """The sidecar (workfiles.StageFiles.common_sidecar) with YADE's version."""
+        d = self.der["d"]
         w = measure.walls(self.lay)
-        steps = O.iter - st["iter0"]
-        n_p = max(1, st["n_acc"])
-        p_mean = st["sum_p"] / n_p if st["n_acc"] else math.nan
-        out = dict(
-            stage=self.stage, engine="yade", scene=sc, scene_sha256=self.hash, seed=sc["seed"], N=self.lay["N"],
-            N_wall=self.lay["n_wall"], dt=st["dt"], dt_over_tc=st["dt"] / der["tc"], kn=der["kn"], kt=der["kt"],
-            kappa=sc["material"]["kappa"], inertial_number=sc["loading"]["inertial_number"],
-            U=der["U"], gammadot_nominal=der["gammadot"], time_unit_s=T0,
-            steps=steps, samples=st["rows"], engines=self.engine_names,
-            yade_version=yade.config.version, wall_time_s=st["wall_time"],
-            particle_steps_per_s=self.lay["N"] * steps / st["wall_time"] if st["wall_time"] > 0 else math.nan,
-            cpu_time_s=st["cpu_time"], sampler_cpu_s=st.get("sampler_cpu", 0.0),
-            sampling_cost=st.get("sampler_cpu", 0.0) / max(1e-12, st["cpu_time"] - st.get("sampler_cpu", 0.0)),
-            resumed=st["resumed"], t_end=(O.time - st["t_origin"]) / T0, strain_end=st["strain"],
-            gap_end=(w["y_top"] - w["y_bot"]) / d,
-            sampling_steps=dict(fine=st["fine_every"], coarse=st["coarse_every"], every=st["every"]),
-            columns=self.columns(),
-            overlap_end_d=measure.overlap_stats(measure.grain_overlaps_d(self.lay["N"], d)))
+        phi = None
         if self.stage == "pack":
-            excl = sc["sampling"]["bulk_exclusion_d"] * d
-            b = self.bulk.measure(self.lay, w["y_bot"] + excl, w["y_top"] - excl, der["W"])
-            pw = (w["fy_top"] - w["fy_bot"]) / (2 * der["W"] * d) / p
-            out.update(phi=b["phi"], gap=out["gap_end"], converged_at_t=st.get("converged_at_t"),
-                       phase_steps=st.get("phase_steps", {}),
-                       p_wall_end=pw, kappa_achieved=der["kn"] / (pw * p * d))
-        else:
-            out.update(strain_start=st["strain_start"], t_start=st["t_start"], p_wall_mean=p_mean,
-                       kappa_achieved=der["kn"] / (p_mean * p * d),
-                       inertial_number_achieved=(st["sum_gd"] / n_p) / math.sqrt(p_mean),
-                       gap_mean=st.get("sum_gap", math.nan) / n_p)
-            if self.stage in ("heaviside", "sinusoidal"):
-                out.update(reversal_strain=st["strain_start"], reversal_t=st["t_start"])
-            elif self.stage != "preshear":   # a schedule: every reversal, the first also as reversal_strain, _t
-                out.update(reversal_strain=st["reversals"][0]["strain"], reversal_t=st["reversals"][0]["t"],
-                           reversals=st["reversals"], segments=[
-                               {k: v for k, v in seg.items() if k not in ("start", "n_transition")}
-                               for seg in st["segments"]])
-            if self.stage == "sinusoidal":
-                out["transition_steps"] = st["n_transition"]
+            excl = self.scene["sampling"]["bulk_exclusion_d"] * d
+            phi = self.bulk.measure(self.lay, w["y_bot"] + excl, w["y_top"] - excl, self.der["W"])["phi"]
+        out = self.common_sidecar("yade", self.engine_names, O.iter - self.st["iter0"], O.time, w,
+                                  measure.grain_overlaps_d(self.lay["N"], d), phi)
+        out["yade_version"] = yade.config.version
         return out

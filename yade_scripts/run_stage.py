@@ -40,14 +40,7 @@ def run(scene, sha, stage, case_dir, renew):
         return 2
     import stages  # YADE imports only once the scene is known to be good and the stage is ours
 
-    stages.install_signal_handlers()
-
-    def work():
-        st = stages.Stage(scene, sha, stage, case_dir)
-        st.prepare()
-        st.run(renew)
-
-    return stagecli.exit_code(work)
+    return stagecli.run_stage(stages.Stage(scene, sha, stage, case_dir), renew)
 
 
 if __name__ == "__main__":  # also under the launcher (`yade -x` runs a script as __main__)
@@ -57,13 +50,4 @@ if __name__ == "__main__":  # also under the launcher (`yade -x` runs a script a
         except yadelib.YadeNotFound as e:
             print(f"YADE not found: {e}", file=sys.stderr)
             os._exit(2)
-    try:
-        rc = main(sys.argv[1:])
-    except Exception:  # exit code 1, with the traceback (in the log once it is open)
-        import traceback
-
-        traceback.print_exc()
-        rc = 1
-    sys.stdout.flush()
-    sys.stderr.flush()
-    os._exit(rc)  # YADE's threads are not joined at exit: leave at once with the stage's code
+    stagecli.leave(lambda: main(sys.argv[1:]))

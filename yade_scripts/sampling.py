@@ -11,16 +11,14 @@ from yade.wrapper import Omega
 
 import engines
 import measure
-from rows import PACK_COLUMNS, fmt, pressure_window_problem, state_problem, wall_row
+import packphases
+from rows import fmt, pressure_window_problem, state_problem, wall_row
 from stageerrors import GuardError
 
 O = Omega()
 
 
 class Sampling:
-    def columns(self):
-        return measure.COLUMNS + (PACK_COLUMNS if self.stage == "pack" else [])
-
     def _install_engines(self):
         st = self.st
         builtins._ys_sample = self.sample
@@ -33,7 +31,7 @@ class Sampling:
         if st.get("n_transition", 0) > 0:  # inside (or past) the current segment's half cosine
             remaining_transition = max(0, st["tr_iter0"] + st["n_transition"] + 1 - O.iter)
         # the pack's own Cundall damping, restored to effects.damping in the saved packing (finish)
-        damping = self._pack_damping() if self.stage == "pack" else None
+        damping = packphases.damping(self.scene, st["phase"]) if self.stage == "pack" else None
         O.engines = engines.build(self.scene, every, "_ys_sample()",
                                   "_ys_wall()" if remaining_transition else None, remaining_transition,
                                   damping=damping)

@@ -12,6 +12,7 @@ import os
 
 import build
 import engines
+import protocol
 import scene as scenemod
 from stageerrors import InputError
 from yade.wrapper import Omega
@@ -50,69 +51,30 @@ class Shearing:
         st["every"] = st["fine_every"]
 
     def _plan_schedule(self, steps_per_strain):
-        """The reversal stage's segments in steps (scene.segments), and the start of the first.
-
-        Segment k runs from step start_k = ceil(S_k * steps_per_strain) since the stage's start,
-        S_k the strain at full rate of the segments before it, to start_{k+1}; a segment whose
-        direction differs from the one before it (the pre-shear's, +1, for the first) starts
-        with a reversal: sharp (heaviside) or a half cosine of the wall speed over
-        ceil(transition_strain * steps_per_strain) steps.
-        """
-        st, smp = self.st, self.scene["sampling"]
-        segs, at, plan = scenemod.segments(self.scene, self.stage), 0.0, []
-        for seg in segs:
-            n_tr = (int(math.ceil(seg["transition_strain"] * steps_per_strain))
-                    if seg["transition"] == "half_cosine" else 0)
-            plan.append(dict(seg, start=int(math.ceil(at * steps_per_strain)), n_transition=n_tr))
-            at += seg["strain"]
-        st["segments"], st["segment"], st["direction"] = plan, -1, 1
-        st["n_steps"] = int(math.ceil(at * steps_per_strain))
-        st["fine_window_steps"] = int(math.ceil(smp["fine_window"] * steps_per_strain))
-        st["reversals"] = []
-        # fine sampling from the stage's start, as in the pre-shear (a first segment that reverses restarts it)
-        st["fine_end"] = O.iter + st["fine_window_steps"]
+        """The reversal stage's segments in steps (protocol.plan), and the start of the first."""
+        protocol.plan(self.st, scenemod.segments(self.scene, self.stage), self.scene["sampling"]["fine_window"],
+                      steps_per_strain, O.iter)
         self._enter_segment(0, at_start=True)
 
     def _next_boundary(self):
         """Steps since the stage's start at which the next segment begins (None: in the last one)."""
-        st = self.st
-        k = st.get("segment", -1) + 1
-        if self.stage == "preshear" or self.stage == "pack" or k >= len(st["segments"]):
-            return None
-        return st["segments"][k]["start"]
+        return protocol.next_boundary(self.st)
 
     def _enter_segment(self, k, at_start=False):
-        """Start segment k between two steps: a row for the state just before a reversal
-        (not at the stage's start: its contact forces are not saved with the state), the
-        new wall speeds (or the half cosine towards them), fine sampling from here on."""
+        """Start segment k between two steps (protocol.enter): a row for the state just before a
+        reversal (not at the stage's start: its contact forces are not saved with the state),
+        the new wall speeds (or the half cosine towards them), fine sampling from here on."""
         st, der = self.st, self.der
-        seg = st["segments"][k]
-        reverses = seg["direction"] != st["direction"]
-        if reverses and not at_start:
+        turn = protocol.reverses(st, k)
+        if turn and not at_start:
             self._sample()
             if self.error is not None:
                 raise self.error
-        st["segment"] = k
-        if reverses:
-            st["reversals"].append(dict(strain=st["strain"], t=(O.time - st["t_origin"]) / der["T0"],
-                                        direction=seg["direction"], transition=seg["transition"],
-                                        **({"transition_strain": seg["transition_strain"]}
-                                           if seg["transition"] == "half_cosine" else {})))
-            st["tr_iter0"], st["tr_from"] = O.iter, st["direction"]
-            # the pressure guard's window restarts at each reversal, as at the stage's start: the
-            # wall pressure dips for a few percent of strain after every reversal, physically
-            st["window"], st["guard_from"] = [], (O.iter - st["iter0"]) * der["dt"] * der["gammadot"]
-            st["n_transition"] = seg["n_transition"]
-            st["fine_end"] = O.iter + seg["n_transition"] + st["fine_window_steps"]
-        st["direction"] = seg["direction"]
-        U, d0 = der["U"], st.get("tr_from", 1)
-        if reverses and seg["n_transition"] > 0:
-            build.set_wall_speeds(self.lay, d0 * U, -d0 * U)  # the half cosine starts at the old speed
-        else:
-            build.set_wall_speeds(self.lay, seg["direction"] * U, -seg["direction"] * U)
-        if not at_start and reverses:
-            if seg["n_transition"] > 0:
-                self._install_wall_runner(seg["n_transition"] + 1)
+        u = protocol.enter(st, k, O.iter, (O.time - st["t_origin"]) / der["T0"], der)
+        build.set_wall_speeds(self.lay, u, -u)
+        if not at_start and turn:
+            if st["n_transition"] > 0:
+                self._install_wall_runner(st["n_transition"] + 1)
             sampler = self.sampler
             sampler.iterPeriod = st["fine_every"]
             sampler.iterLast = st["last_sample_iter"] - 1  # the fine grid starts at the reversal
@@ -126,17 +88,7 @@ class Shearing:
         self.engine_names = engines.describe(O.engines)
 
     def wall_speed(self):
-        r"""Half cosine of the top wall speed from a U to b U over the transition, then b U.
-
-        .. math:: u(x) = U\left[\tfrac12(a + b) + \tfrac12(a - b)\cos\pi x\right],\quad
-                  x = \min(1, k / n_{tr})
-
-        a, b the directions before and after the reversal, k the steps since its start
-        (a = 1, b = -1: U cos(pi x), the sinusoidal protocol).
-        """
-        st = self.st
-        k = O.iter + 1 - st["tr_iter0"]
-        x = min(1.0, k / st["n_transition"])
-        a, b = st["tr_from"], st["direction"]
-        u = self.der["U"] * (0.5 * (a + b) + 0.5 * (a - b) * math.cos(math.pi * x))
+        """The top wall's speed in the half cosine (protocol.half_cosine_speed), set by a per-step
+        PyRunner inside step O.iter: the speed after it, k = O.iter + 1 - tr_iter0 steps in."""
+        u = protocol.transition_speed(self.st, self.der, O.iter + 1)
         build.set_wall_speeds(self.lay, u, -u)

@@ -10,7 +10,11 @@ the engine. Exit codes: 0 done, 1 unexpected error, 2 bad scene, missing input o
 found, 3 guard fired, 4 interrupted by SIGTERM or SIGINT, 5 another live process runs this
 stage of this case (nothing touched, the log included).
 """
+import os
+import signal
 import sys
+import time
+import traceback
 
 import scene as scenemod
 import stagelock
@@ -21,6 +25,30 @@ from stageerrors import GuardError, InputError, Interrupted
 EXITS = ((InputError, 2, "input error"), (GuardError, 3, "guard"), (Interrupted, 4, "interrupted"))
 
 RUNNERS = {"yade": "yade_scripts/run_stage.py", "lammps": "lammps_scripts/run_stage.py"}
+SIGNALS = []  # (signal number, time.time() when Python ran the handler) of each SIGTERM/SIGINT
+
+
+def on_signal(signum, frame):
+    SIGNALS.append((signum, time.time()))
+
+
+def install_signal_handlers():
+    """SIGTERM and SIGINT only record themselves (SIGNALS); the stage's run loop checkpoints and
+    stops at the end of its current run chunk (exit code 4, `interrupted`).
+
+    A SIGINT ignored by the parent (a background job of a non-interactive shell) stays ignored.
+    """
+    signal.signal(signal.SIGTERM, on_signal)
+    if signal.getsignal(signal.SIGINT) is not signal.SIG_IGN:
+        signal.signal(signal.SIGINT, on_signal)
+
+
+def interrupted(where, rows, partial):
+    """The Interrupted error of the first signal received: checkpoint at ``where`` (its step),
+    ``rows`` rows, in the work folder ``partial``."""
+    name = signal.Signals(SIGNALS[0][0]).name
+    return Interrupted(f"{name} received: checkpoint at {where} ({rows} rows) written in {partial}; "
+                       f"run the same command again to resume")
 
 
 def usage(engine):
@@ -63,6 +91,35 @@ def exit_code(work):
         print(f"{what}: {e}", file=sys.stderr)
         return code
     return 0
+
+
+def run_stage(stage, renew):
+    """Run the engine's ``stage`` (a stages.Stage): signals recorded (`install_signal_handlers`),
+    prepare, run to the end (``renew`` after every run chunk), the engine closed whatever happens;
+    the exit code (`exit_code`)."""
+    install_signal_handlers()
+
+    def work():
+        try:
+            stage.prepare()
+            stage.run(renew)
+        finally:
+            stage.close()
+
+    return exit_code(work)
+
+
+def leave(main):
+    """The runner's last act: ``main()``'s exit code (1 with the traceback on an unexpected error: in
+    the log once it is open), the output flushed, then os._exit (YADE's threads are not joined)."""
+    try:
+        rc = main()
+    except Exception:
+        traceback.print_exc()
+        rc = 1
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(rc)
 
 
 def main(argv, engine, run):

@@ -19,69 +19,43 @@ The run loop advances the simulation in chunks of about CHUNK_S of wall time
 (`O.run(n)` stops after a whole step; runwait waits for it), cut at segment boundaries and at the
 reload points (every checkpoint.RELOAD_EVERY steps), where the state is reloaded
 and a checkpoint, if asked for, written. SIGTERM and SIGINT (see
-`install_signal_handlers`) only record themselves, whenever Python runs the handler
+`stagecli.install_signal_handlers`) only record themselves, whenever Python runs the handler
 (during runwait's sleeps too), and are acted on at the end of the current chunk: the stage
 goes back to the last reload point, checkpoints it and raises Interrupted (exit
 code 4). Checkpoints are never written inside a step.
 """
-import os
-import signal
 import time
 
 from yade.wrapper import Omega
 
 import measure
 import runwait
-import scene as scenemod
 from checkpoint import Checkpoints
 from outputs import Outputs
 from packing import Packing
 from sampling import Sampling
 from shearing import Shearing
-from stageerrors import GuardError, InputError, Interrupted  # noqa: F401  (run_stage's exit codes)
+from stagecli import SIGNALS, interrupted
+from stageerrors import GuardError, InputError  # noqa: F401  (run_stage's exit codes)
+from workfiles import StageFiles
 
 O = Omega()
 
 CHUNK_S = 1.0  # wall time of one O.run chunk: the longest wait between a signal and its checkpoint
-SIGNALS = []  # (signal number, time.time() when Python ran the handler) of each SIGTERM/SIGINT
 
 
-def _on_signal(signum, frame):
-    SIGNALS.append((signum, time.time()))
-
-
-def install_signal_handlers():
-    """SIGTERM and SIGINT only record themselves; the run loop checkpoints and stops.
-
-    A SIGINT ignored by the parent (a background job of a non-interactive shell)
-    stays ignored.
-    """
-    signal.signal(signal.SIGTERM, _on_signal)
-    if signal.getsignal(signal.SIGINT) is not signal.SIG_IGN:
-        signal.signal(signal.SIGINT, _on_signal)
-
-
-class Stage(Packing, Shearing, Sampling, Checkpoints, Outputs):
+class Stage(StageFiles, Packing, Shearing, Sampling, Checkpoints, Outputs):
     def __init__(self, scene, scene_hash, stage, case_dir):
-        self.scene, self.hash, self.stage, self.case_dir = scene, scene_hash, stage, case_dir
-        self.der = scenemod.derived(scene)
-        self.partial = os.path.join(case_dir, ".partial", stage)
-        self.csv_path = os.path.join(self.partial, f"{stage}.csv")
-        self.resume_path = os.path.join(self.partial, "resume.json")
+        super().__init__(scene, scene_hash, stage, case_dir)
         self.error = None
-        self.done = False
         self.want_checkpoint = False
-        self.csv = None
+
+    def close(self):
+        """Nothing to close: YADE lives as long as the process (stagecli.run_stage calls it)."""
 
     def start_fresh(self):
-        der, sc = self.der, self.scene
-        smp = sc["sampling"]
-        st = dict(stage=self.stage, rows=0, sum_p=0.0, sum_gd=0.0, n_acc=0, wall_time=0.0,
-                  window=[], pack_ok=0)
-        self.st = st
-        steps_per_strain = 1.0 / (der["gammadot"] * der["dt"])
-        st["fine_every"] = max(1, int(round(smp["fine_interval"] * steps_per_strain)))
-        st["coarse_every"] = max(st["fine_every"], int(round(smp["coarse_interval"] * steps_per_strain)))
+        """The cell or the previous stage's state, the stage's plan and wall speeds (workfiles.StageFiles.fresh_state)."""
+        st, steps_per_strain = self.fresh_state()
         if self.stage == "pack":
             self._start_pack(st)
         else:
@@ -90,7 +64,6 @@ class Stage(Packing, Shearing, Sampling, Checkpoints, Outputs):
         st["x_rel"] = w["x_top"] - w["x_bot"]
         st["gap"] = w["y_top"] - w["y_bot"]
         st["last_sample_iter"] = -1
-        st["scene_sha256"] = self.hash
 
     def run(self, lock=None):
         """Step to the end in chunks; checkpoint when due or on a signal.
@@ -150,6 +123,4 @@ class Stage(Packing, Shearing, Sampling, Checkpoints, Outputs):
         same bit, by the resumed run."""
         self.rewind()
         self.checkpoint()
-        name = signal.Signals(SIGNALS[0][0]).name
-        raise Interrupted(f"{name} received: checkpoint at iteration {O.iter} ({self.st['rows']} rows) "
-                          f"written in {self.partial}; run the same command again to resume")
+        raise interrupted(f"iteration {O.iter}", self.st["rows"], self.partial)

@@ -109,6 +109,28 @@ rule stage_overhead:
         " --sampling {params.sampling:q} --run {params.run:q} > {log:q} 2>&1"
 
 
+# The two DEM engines side by side (tools/engine_benchmark.py, issue 36): YADE's pre-shear stage and
+# LAMMPS's, paired, on the quick preset's narrow cell (626 disks) and the paper's W = 4H cell (about
+# 5,000 disks), and bare LAMMPS on 1 and 2 MPI ranks; run by `make bench` only.
+rule engine_throughput:
+    output:
+        table=f"{RESULTS}/accuracy/engine_throughput.csv",
+        summary=f"{RESULTS}/accuracy/engine_throughput_summary.csv",
+    params:
+        sampling=lambda wc: json.dumps(config["sampling"]),
+    resources:
+        runtime=COST_ENGINE_THROUGHPUT.runtime,
+        mem_mb=COST_ENGINE_THROUGHPUT.mem_mb,
+    log:
+        f"{RESULTS}/logs/accuracy/engine_throughput.log",
+    benchmark:
+        f"{RESULTS}/benchmarks/accuracy/engine_throughput.tsv"
+    threads: 2  # the bare LAMMPS run on 2 MPI ranks
+    shell:
+        "OMP_NUM_THREADS=1 YADE_LAUNCHER={YADE:q} python3 tools/engine_benchmark.py --out {output.table:q}"
+        " --sampling {params.sampling:q} > {log:q} 2>&1"
+
+
 rule packing_cost:
     input:
         sidecars=[

@@ -110,6 +110,7 @@ COST_SMALL = measured(3.5, 145)  # dem_summary, compare_heldout
 COST_ODE_WORK_PRECISION = measured(30.4, 129)
 COST_BATCHED_COST = measured(74.0, 266)  # quick preset
 COST_STAGE_OVERHEAD = measured(2082.8, 269)  # make bench at nice 10 on 2 cores busy with 6-8 jobs (312 s of CPU)
+COST_ENGINE_THROUGHPUT = measured(900.0, 500)  # not benchmarked here: a guess (the 5,000-disk packings dominate)
 COST_CALIBRATE = measured(18.3, 229, floor_min=120, per_series=True)
 COST_CALIBRATION_COST = measured(2 * 18.3, 229, floor_min=240, per_series=True)  # two calibrations per set
 COST_COMPARE = measured(14.6, 203, floor_min=30, per_series=True)
