@@ -27,8 +27,6 @@ from sampling import Sampling
 from shearing import Shearing
 from stageerrors import GuardError, InputError  # noqa: F401  (run_stage's exit codes)
 
-STAGES = ("pack", "preshear", "heaviside")  # what lammps_scripts runs (pre-flight: preflight/checks.py)
-
 
 class Stage(workfiles.StageFiles, Packing, Shearing, Sampling, Checkpoints, Outputs):
     def __init__(self, scene, scene_hash, stage, case_dir):
