@@ -1,9 +1,10 @@
 """A campaign's price before it runs: its DEM stages' projected core-seconds, wall times and what drives them.
 
-Every DEM stage of every case is priced by the cost model (``campaign.cost``) at the throughput
-measured by the campaign's own earlier runs (the sidecars in ``<results_dir>/dem/``) or, with none,
-at the documented one. A case the config restores from a data release (config ``release:``,
-docs/data-release.md) runs no DEM and costs nothing. Then
+Every DEM stage of every case is priced by the cost model (``campaign.cost``) at the throughput of
+the campaign's engine (config ``engine``: YADE or LAMMPS) measured by the campaign's own earlier runs
+of that engine (the sidecars in ``<results_dir>/dem/``) or, with none, at that engine's documented one.
+A case the config restores from a data release (config ``release:``, docs/data-release.md) runs no DEM
+and costs nothing. Then
 
     core-hours = sum of the stages' seconds / 3600,
     wall time on C cores = campaign.schedule.chain_makespan (the cases' chains on C cores),
@@ -27,8 +28,8 @@ from dem_contract.release import CASES_DIR, released_cases
 
 from .cases import cases
 from .configfile import load_configfile
-from .cost import (DOCUMENTED_THROUGHPUT, Throughput, core_seconds, documented_throughput, measured_throughput,
-                   scene_disks, scene_stages, scene_value, stage_steps, stage_strain)
+from .cost import (ENGINE_NAMES, Throughput, core_seconds, documented_throughput, engine_of, measured_throughput,
+                   scene_disks, scene_stages, scene_throughput, scene_value, stage_steps, stage_strain)
 from .scenes import result_key, scene_from_config
 from .schedule import chain_makespan, longest_chain
 
@@ -57,18 +58,19 @@ def restored_cases(config: dict, scenes: dict, root=ROOT) -> dict:
     return out
 
 
-def stage_table(scenes: dict, throughput: Throughput = DOCUMENTED_THROUGHPUT, restored=()) -> pd.DataFrame:
-    """One row per DEM stage of every case: case, stage, N, steps, core_s (projected one-thread seconds),
+def stage_table(scenes: dict, throughput: Throughput | None = None, restored=()) -> pd.DataFrame:
+    """One row per DEM stage of every case: case, stage, N, steps, core_s (projected one-thread seconds at
+    ``throughput``, or at the documented one of each scene's engine when None: ``campaign.cost.scene_throughput``),
     throughput (``measured``, ``documented``, or ``restored`` for a case restored from a release: 0 s)."""
     rows = []
     for label, scene in scenes.items():
-        n = scene_disks(scene)
+        n, rate = scene_disks(scene), scene_throughput(scene, throughput)
         for stage in scene_stages(scene):
             steps = stage_steps(scene, stage)
             rows.append(dict(case=label, stage=stage, N=n, steps=int(round(steps)),
-                             core_s=0.0 if label in restored else core_seconds(n, steps, throughput),
+                             core_s=0.0 if label in restored else core_seconds(n, steps, rate),
                              throughput="restored" if label in restored else
-                             "measured" if throughput.measured else "documented"))
+                             "measured" if rate.measured else "documented"))
     return pd.DataFrame(rows, columns=["case", "stage", "N", "steps", "core_s", "throughput"])
 
 
@@ -114,7 +116,7 @@ def price(config: dict, cores: int = 2, root=ROOT, reference=QUICK) -> Price:
     ``validate``) on ``cores``, against ``reference``."""
     scenes = campaign_scenes(config)
     restored = restored_cases(config, scenes, root)
-    throughput = measured_throughput(config.get("results_dir", "results"), exclude=restored)
+    throughput = measured_throughput(config.get("results_dir", "results"), exclude=restored, engine=engine_of(config))
     ref = load_configfile(reference)
     return Price(str(config.get("campaign", "")), stage_table(scenes, throughput, restored), throughput, int(cores),
                  restored, cost_drivers(scenes, campaign_scenes(ref)))
@@ -135,10 +137,11 @@ def _times(r: float) -> str:
 
 def _settings(scenes: dict) -> pd.DataFrame:
     """Per scene, the settings the cost grows with: I, kappa, dt_over_tc, N, the cost of a step
-    N / T(N) (T the documented throughput) and the strain sheared (pre-shear and reversal runs)."""
+    N / T(N) (T the documented throughput of the scene's engine) and the strain sheared (pre-shear and
+    reversal runs)."""
     return pd.DataFrame([dict(I=s["loading"]["inertial_number"], kappa=s["material"]["kappa"],
                               dt=scene_value(s, "timestep", "dt_over_tc"), N=scene_disks(s),
-                              per_step=scene_disks(s) / documented_throughput(scene_disks(s)),
+                              per_step=scene_disks(s) / documented_throughput(scene_disks(s), engine_of(s)),
                               strain=sum(stage_strain(s, k) for k in scene_stages(s) if k != "pack"))
                          for s in scenes.values()])
 
@@ -148,7 +151,7 @@ def cost_drivers(scenes: dict, reference: dict) -> list[tuple[float, str]]:
     the setting costs the reference's (the quick preset's) cheapest.
 
     ratios: I_ref / I (steps per strain grow as 1/I), sqrt(kappa / kappa_ref), dt_ref / dt,
-    (N / T(N)) / (N_ref / T(N_ref)) (the cost of a step, T the documented throughput),
+    (N / T(N)) / (N_ref / T(N_ref)) (the cost of a step, T the documented throughput of each one's engine),
     strain / strain_ref (per case), cases / cases_ref.
     """
     c, r = _settings(scenes), _settings(reference)
@@ -195,7 +198,8 @@ def price_lines(p: Price, threshold_h: float = THRESHOLD_H, root=ROOT) -> list[s
     restored = f" ({len(p.restored)} more restored from {releases}, at no cost)" if p.restored else ""
     lines = [f"price: {name}: {plural(p.n_run, 'DEM case')}{restored}, {p.core_s / 3600:.2g} core-hours, about "
              f"{duration(p.wall_s)} on {plural(p.cores, 'core')}, {duration(p.cluster_s)} on a cluster with one core "
-             f"per job (throughput: {'measured' if p.throughput.measured else 'documented'})"]
+             f"per job ({ENGINE_NAMES[p.throughput.engine]}'s throughput: "
+             f"{'measured' if p.throughput.measured else 'documented'})"]
     if p.wall_s > threshold_h * 3600:
         lines.append(f"price: {name} takes more than {threshold_h:g} h on {plural(p.cores, 'core')}; what drives "
                      f"the cost: {p.drivers[0][1]} (each stage: python -m campaign estimate --configfile ...)")

@@ -18,12 +18,12 @@ Read only, from what the DEM stages write (nothing is locked, nothing written):
 
 A stage is done (sidecar), restored (its case taken from a data release), running, stopped (a log
 or a checkpoint, no live owner: killed, or a guard fired) or waiting. Core-hours spent are the
-finished stages' CPU; core-hours left are the cost model's (``campaign.cost``, documented
-throughput) for what is not done, times the measured / projected ratio of the finished stages,
-packs and shear stages apart (a pack's time to converge varies with kappa more than the model
-says; a shear stage's steps are exact). The campaign's ETA
-schedules what is left on the cores in use (``campaign.schedule.chain_makespan``: the running
-stages first, each at its log's ETA), at the wall / CPU ratio the finished stages ran at.
+finished stages' CPU; core-hours left are the cost model's (``campaign.cost``, the documented
+throughput of the scene's engine) for what is not done, times the measured / projected ratio of
+the finished stages, packs and shear stages apart (a pack's time to converge varies with kappa
+more than the model says; a shear stage's steps are exact). The campaign's ETA schedules what is
+left on the cores in use (``campaign.schedule.chain_makespan``: the running stages first, each at
+its log's ETA), at the wall / CPU ratio the finished stages ran at.
 """
 from __future__ import annotations
 
@@ -109,7 +109,7 @@ class StageStatus:
     case: str
     stage: str
     state: str                      # done, restored, running, stopped, waiting
-    projected_s: float              # the cost model's one-thread seconds, documented throughput
+    projected_s: float              # the cost model's one-thread seconds, the engine's documented throughput
     cpu_s: float = 0.0              # a finished stage's CPU (sidecar)
     wall_s: float = 0.0
     fraction: float = 0.0           # of the stage done (running: its log; stopped: at its checkpoint)

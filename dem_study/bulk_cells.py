@@ -195,7 +195,8 @@ def case_scene(config: dict, label: str) -> dict:
 
 
 def estimate(config: dict) -> pd.DataFrame:
-    """Per case: disks, steps and estimated one-thread seconds (``campaign.cost``, documented throughput).
+    """Per case: disks, steps and estimated one-thread seconds (``campaign.cost``, the documented throughput
+    of the config's engine).
 
     seconds = N (pack_steps + steps_per_strain (preshear + reversal strain)) / throughput(N)
 
@@ -206,5 +207,6 @@ def estimate(config: dict) -> pd.DataFrame:
     dt = config["timestep"]["dt_over_tc"]
     strain = s["preshear_strain"] + table["cell"].map(lambda c: reversal_strain(s["cells"][c], s))
     table["steps"] = cost.steps_per_strain(s["kappa"], s["inertial_number"], dt) * strain + cost.pack_steps(s["kappa"], dt)
-    table["est_core_s"] = [cost.core_seconds(n, steps) for n, steps in zip(table["N"], table["steps"])]
+    rate = cost.documented(cost.engine_of(config))
+    table["est_core_s"] = [cost.core_seconds(n, steps, rate) for n, steps in zip(table["N"], table["steps"])]
     return table

@@ -164,7 +164,7 @@ def estimate(config: dict) -> pd.DataFrame:
     """Per DEM case of the study: disks, shear steps and estimated one-thread seconds of pack + shear.
 
     est_core_s = N (pack_steps + steps) / throughput(N), steps = steps_per_strain (preshear + heaviside strain),
-    the cost model of ``campaign.cost`` at its documented throughput.
+    the cost model of ``campaign.cost`` at the documented throughput of the config's engine.
     """
     acc = config["accuracy"]
     strain = acc["preshear_strain"] + acc["heaviside_strain"]
@@ -176,7 +176,8 @@ def estimate(config: dict) -> pd.DataFrame:
     pts["N"] = [cost.n_disks(h, W, **kw) for h in pts["H_over_d"]]
     pts["steps"] = [cost.steps_per_strain(k, i, f) * strain
                     for k, i, f in zip(pts["kappa"], pts["inertial_number"], pts["dt_over_tc"])]
-    pts["est_core_s"] = [cost.core_seconds(n, steps + cost.pack_steps(k, f))
+    rate = cost.documented(cost.engine_of(config))
+    pts["est_core_s"] = [cost.core_seconds(n, steps + cost.pack_steps(k, f), rate)
                          for n, steps, k, f in zip(pts["N"], pts["steps"], pts["kappa"], pts["dt_over_tc"])]
     return pts
 

@@ -266,3 +266,18 @@ def test_the_study_cli_fills_the_defaults_the_workflow_fills_from_the_schema():
     validate(filled, str(SCHEMA))
     assert bulk_cells.settings(raw) == filled["accuracy"]["bulk_vs_walls"]
     assert bulk_cells.settings(raw)["match_se"] == 2.0 and bulk_cells.enabled({}) is False
+
+
+def test_a_lammps_bulk_study_is_estimated_at_lammps_documented_throughput():
+    import yaml
+
+    from campaign import cost
+    from campaign.schema_defaults import with_defaults
+    from dem_study import bulk_cells
+
+    root = Path(__file__).resolve().parents[1]
+    config = with_defaults({**yaml.safe_load((root / "config" / "quick.yaml").read_text()),
+                            **yaml.safe_load((root / "config" / "bulk_validation.yaml").read_text())})
+    yade, lammps = bulk_cells.estimate(config), bulk_cells.estimate({**config, "engine": "lammps"})
+    assert len(yade) > 0
+    assert np.allclose(lammps["est_core_s"], yade["est_core_s"] / cost.LAMMPS_OVER_YADE, rtol=1e-12)

@@ -11,7 +11,7 @@ import shutil
 import pytest
 import yaml
 
-from campaign import price
+from campaign import cost, price
 from campaign.schema_defaults import with_defaults
 from tests.helpers import ROOT, preflight_check, run_main
 
@@ -37,7 +37,7 @@ def test_the_issues_example_is_priced_above_an_hour_naming_the_inertial_number(t
     lines = r.stdout.splitlines()
     assert lines[0].endswith(": ok")
     assert lines[1].startswith("price: campaign quick: 4 DEM cases, 4 core-hours, about 2.0 h on 2 cores")
-    assert "on a cluster with one core per job (throughput: documented)" in lines[1]
+    assert "on a cluster with one core per job (YADE's throughput: documented)" in lines[1]
     assert lines[2] == ("price: campaign quick takes more than 1 h on 2 cores; what drives the cost: the inertial "
                         "number 6.04e-5, 83 times slower than the quick preset's 0.005 (each stage: python -m "
                         "campaign estimate --configfile ...)")
@@ -125,6 +125,22 @@ def test_estimate_prices_at_the_throughput_of_the_campaigns_earlier_runs(tmp_pat
     p = price.price(with_defaults(yaml.safe_load(path.read_text())))
     # three seeds priced at the rate two of them ran at: 3/2 of their CPU, to the pack's projection
     assert p.core_s == pytest.approx(1.5 * measured, rel=0.03)
+
+
+def test_a_lammps_campaign_is_priced_at_lammps_documented_throughput_not_at_yades_earlier_runs(tmp_path):
+    unreleased = {key: value for key, value in DECIDE.items() if key != "release"}
+    config = with_defaults({**unreleased, "seeds": [1, 3, 9], "results_dir": str(tmp_path / "results")})
+    for seed in (1, 3):   # YADE's sidecars (no engine key)
+        case = f"p100000_I0.001_s{seed}"
+        shutil.copytree(ROOT / "data" / "bulk-decide" / "cases" / case / "sidecars",
+                        tmp_path / "results" / "dem" / case)
+    yade, lammps = price.price(config), price.price({**config, "engine": "lammps"})
+    assert yade.throughput.measured and lammps.throughput is cost.documented("lammps")
+    yade_documented = price.stage_table(price.campaign_scenes(config))["core_s"].sum()
+    assert lammps.core_s == pytest.approx(yade_documented / cost.LAMMPS_OVER_YADE)
+    assert set(lammps.table["throughput"]) == {"documented"}
+    assert lammps.throughput.source.startswith("the documented figure (LAMMPS")
+    assert "per job (LAMMPS's throughput: documented)" in price.price_lines(lammps)[0]
 
 
 def test_snakemake_prints_the_price_before_any_job(shared_dry_run):

@@ -5,6 +5,7 @@ The model is held against the DEM itself: its disk count against yade_scripts/sc
 data/bulk-decide: five seeds at kappa 1e5 on the narrow cell, their sidecars as YADE wrote them),
 and its seconds against their measured CPU time.
 """
+import functools
 import json
 import math
 
@@ -71,12 +72,39 @@ def test_a_monodisperse_cell_has_d2_disks_and_no_division_by_zero():
     assert cost.n_disks(12, 4, 0.8, 1.0, 1.0 + 1e-12) == cost.n_disks(12, 4, 0.8, 1.0, 1.0)
 
 
-def test_documented_throughput_interpolates_its_two_points_log_log_and_holds_outside():
-    (n0, r0), (n1, r1) = cost.DOCUMENTED
-    t = cost.documented_throughput
+@pytest.mark.parametrize("engine", ["yade", "lammps"])
+def test_documented_throughput_interpolates_its_two_points_log_log_and_holds_outside(engine):
+    (n0, r0), (n1, r1) = cost.DOCUMENTED[engine]
+    t = functools.partial(cost.documented_throughput, engine=engine)
     assert t(n0) == pytest.approx(r0) and t(n1) == pytest.approx(r1)
     assert t(math.sqrt(n0 * n1)) == pytest.approx(math.sqrt(r0 * r1))   # straight in log-log
     assert t(n0 / 10) == pytest.approx(r0) and t(n1 * 10) == pytest.approx(r1)
+
+
+def engine_scene(scene, engine):
+    """``scene`` run by ``engine`` (as campaign.scenes writes it: no ``engine`` key for YADE)."""
+    out = {k: v for k, v in scene.items() if k != "engine"}
+    return {**out, "engine": engine} if engine != "yade" else out
+
+
+@pytest.mark.parametrize("W_over_H", [0.5, 4])   # the narrow cell (626 disks) and the paper's (about 5,000)
+def test_a_lammps_scene_is_priced_cheaper_than_the_same_yade_scene_by_the_documented_ratio(W_over_H):
+    (_, _, side), = [s for s in released_sidecars({1}) if s[1] == "preshear"]
+    yade = engine_scene({**side["scene"], "geometry": {**side["scene"]["geometry"], "W_over_H": W_over_H}}, "yade")
+    lammps = engine_scene(yade, "lammps")
+    assert cost.engine_of(yade) == "yade" and cost.engine_of(lammps) == "lammps"
+    for stage in cost.scene_stages(yade):
+        ratio = cost.stage_seconds(yade, stage) / cost.stage_seconds(lammps, stage)
+        assert ratio == pytest.approx(cost.LAMMPS_OVER_YADE), stage
+    assert "LAMMPS" in cost.scene_throughput(lammps).source and "YADE 2023" in cost.scene_throughput(yade).source
+
+
+def test_a_scene_is_never_priced_at_the_other_engines_throughput():
+    (_, _, side), = [s for s in released_sidecars({1}) if s[1] == "preshear"]
+    with pytest.raises(ValueError, match="a LAMMPS scene priced at YADE's throughput"):
+        cost.stage_seconds(engine_scene(side["scene"], "lammps"), "preshear", cost.DOCUMENTED_THROUGHPUT)
+    with pytest.raises(ValueError, match="a YADE scene priced at LAMMPS's throughput"):
+        cost.stage_seconds(side["scene"], "preshear", cost.documented("lammps"))
 
 
 def test_the_model_gives_the_steps_and_disks_real_runs_took():
@@ -132,6 +160,29 @@ def test_without_sidecars_or_with_other_json_files_only_the_documented_figure_is
     (case / "scene.json").write_text(json.dumps({"seed": 1}))
     t = cost.measured_throughput(tmp_path)
     assert not t.measured and t.factor == 1.0 and t.source.startswith("the documented figure")
+
+
+def test_the_measured_throughput_ignores_the_other_engines_sidecars(tmp_path):
+    """Seed 1's sidecars as YADE wrote them (no ``engine`` key: YADE's) and seed 3's relabelled as LAMMPS's,
+    at half the CPU: each engine's throughput is measured by its own stages alone."""
+    yade = released_sidecars({1})
+    lammps = [(case, stage, {**side, "engine": "lammps", "cpu_time_s": side["cpu_time_s"] / 2})
+              for case, stage, side in released_sidecars({3})]
+    results_with(tmp_path, yade + lammps)
+
+    def rate(stages):
+        shear = [side for _, stage, side in stages if stage != "pack"]
+        return sum(s["N"] * s["steps"] for s in shear) / sum(s["cpu_time_s"] for s in shear)
+
+    t_yade, t_lammps = cost.measured_throughput(tmp_path), cost.measured_throughput(tmp_path, engine="lammps")
+    assert (t_yade.engine, t_lammps.engine) == ("yade", "lammps")
+    assert all("_s1" in p for p in t_yade.sidecars) and all("_s3" in p for p in t_lammps.sidecars)
+    assert t_yade(626) == pytest.approx(rate(yade)) and t_lammps(626) == pytest.approx(rate(lammps))
+    assert "4 stage sidecars of 1 case" in t_lammps.source and "of LAMMPS at 626 disks" in t_lammps.source
+    # measured against LAMMPS's own documented curve: its factor is the ratio to that curve
+    assert t_lammps.factor == pytest.approx(rate(lammps) / cost.documented_throughput(626, "lammps"))
+    yade_only = results_with(tmp_path / "yade_only", yade)
+    assert cost.measured_throughput(yade_only, engine="lammps") is cost.documented("lammps")
 
 
 def test_cases_left_out_of_the_measurement_are_not_read(tmp_path):

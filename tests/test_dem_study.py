@@ -10,6 +10,7 @@ import pandas as pd
 import pytest
 import yaml
 
+from campaign import cost
 from campaign.schedule import makespan
 from dem_study import analysis, grid
 from dem_study.cli import main
@@ -100,6 +101,11 @@ def test_default_subset_takes_about_half_an_hour_on_two_cores(paper):
     assert len(with_repeats) == len(est) + 3 and with_repeats["est_core_s"].sum() > est["est_core_s"].sum()
     full = grid.estimate({**paper, "accuracy": {**paper["accuracy"], "subset": "full"}})
     assert full["est_core_s"].sum() > est["est_core_s"].sum()
+
+
+def test_a_lammps_study_is_estimated_at_lammps_documented_throughput(paper):
+    yade, lammps = grid.estimate(paper), grid.estimate({**paper, "engine": "lammps"})
+    assert np.allclose(lammps["est_core_s"], yade["est_core_s"] / cost.LAMMPS_OVER_YADE, rtol=1e-12)
 
 
 # --- analysis on constructed series -------------------------------------------

@@ -6,6 +6,7 @@ one-node Slurm (workflow/scripts/slurm_local.sh) and is opt-in: marker
 ``slurm``, run with ``RUN_SLURM=1 .venv/bin/python -m pytest -m slurm``
 (root, about 10 minutes).
 """
+import math
 import os
 import re
 import subprocess
@@ -14,6 +15,7 @@ import time
 
 import pytest
 
+from campaign import cost
 from tests.helpers import ROOT, SNAKEMAKE, workflow_copy
 
 README_ARGS = ["--default-resources", "slurm_account=ACCOUNT", "slurm_partition=PARTITION"]
@@ -56,6 +58,25 @@ def test_dem_runtime_follows_the_scene_not_a_flat_default(shared_dry_run):
     assert min(preshear) > 3 * 60, preshear
     study = sorted(int(res["runtime"]) for res in jobs["dem_study_preshear"])
     assert study[0] < study[-1] / 5, study  # the study's cheap and dear points differ
+
+
+def test_a_lammps_stages_slurm_runtime_comes_from_lammps_throughput(shared_dry_run):
+    """The same campaign with ``engine: lammps``: each DEM job's runtime, ceil(DEM_SAFETY seconds / 60 + 2)
+    (workflow/rules/resources.smk), has its projected seconds divided by LAMMPS_OVER_YADE (campaign/cost.py)."""
+    yade = planned_resources(shared_dry_run)
+    lammps = planned_resources(shared_dry_run, "--config", "engine=lammps")
+    overhead = 2   # DEM_OVERHEAD_MIN
+    for rule in ("dem_pack", "dem_preshear", "dem_reversal", "dem_study_preshear"):
+        pairs = list(zip(*(sorted(int(r["runtime"]) for r in jobs[rule]) for jobs in (yade, lammps))))
+        assert pairs and len(pairs) == len(yade[rule]) == len(lammps[rule]), rule
+        for y, m in pairs:
+            # YADE's y = ceil(x + overhead) puts x = DEM_SAFETY seconds / 60 in (y - 1 - overhead, y - overhead];
+            # LAMMPS's is ceil(x / LAMMPS_OVER_YADE + overhead)
+            x_low, x_high = y - 1 - overhead, y - overhead
+            assert (math.ceil(x_low / cost.LAMMPS_OVER_YADE + overhead) <= m
+                    <= math.ceil(x_high / cost.LAMMPS_OVER_YADE + overhead)), (rule, y, m)
+    longest = [max(int(r["runtime"]) for r in jobs["dem_preshear"]) for jobs in (yade, lammps)]
+    assert longest[1] < longest[0] / 3, longest
 
 
 RUN_SLURM = os.environ.get("RUN_SLURM") == "1"

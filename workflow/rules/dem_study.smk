@@ -5,9 +5,9 @@
 # (campaign.scenes.scene_from_config) changed in one key.
 #
 # Cost of the default subset of config/config.yaml, estimated by the cost model
-# (campaign/cost.py: documented throughput 2.3 M particle-steps/s at 500 disks,
-# 0.8 M at 5,000, one thread), steps per unit strain sqrt(4 kappa/pi)/(I dt_over_tc)
-# over 1.9 strain, plus a pack of PACK_TIME time units: with the 3 repeated
+# (campaign/cost.py: documented throughput of YADE 2.3 M particle-steps/s at 500 disks,
+# 0.8 M at 5,000, one thread; LAMMPS's 3.5 times that), steps per unit strain
+# sqrt(4 kappa/pi)/(I dt_over_tc) over 1.9 strain, plus a pack of PACK_TIME time units: with the 3 repeated
 # kappa = 1e5 seeds 19 DEM cases, about 1.4 core-hours (measured with the former,
 # undamped packing, several times longer: 36 min + 13 min on 2 cores).
 # `python -m dem_study estimate --configfile config/config.yaml [--subset full]`

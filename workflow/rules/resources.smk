@@ -5,12 +5,15 @@
 #
 # DEM stages: the projected one-thread seconds of the stage (campaign/cost.py, the one cost
 # model: N * steps / throughput(N) from the scene's kappa, I, dt_over_tc, strain and pack time),
-# at the documented throughput, not this machine's: a cluster node is not this machine, and
+# at the documented throughput of the scene's engine (its `engine`, the config's: YADE's, or
+# LAMMPS's, 3.5 times it), not this machine's: a cluster node is not this machine, and
 # DEM_SAFETY was measured against the documented figure,
 #     runtime = ceil(attempt * (DEM_SAFETY * seconds / 60 + DEM_OVERHEAD_MIN)).
 # Measured on the quick preset (496 disks, two YADE jobs on 2 shared cores): the
 # stages took 0.7-2.1 times this estimate; DEM_SAFETY = 3 covers that and a
-# slower node. A stage stopped at its limit checkpoints and exits (docs/scene.md);
+# slower node. A LAMMPS stage is one job like a YADE stage, and LAMMPS's documented
+# figure is below what its stage measured (campaign/cost.py), so DEM_SAFETY holds for
+# it too. A stage stopped at its limit checkpoints and exits (docs/scene.md);
 # Snakemake's retry (profile `retries`) resubmits it with `attempt` + 1, so a
 # longer limit, and it resumes from the checkpoint.
 # Memory: 253 MB peak RSS measured at 496 disks (YADE + Python); taken as
@@ -23,7 +26,7 @@ from campaign.cost import stage_seconds as dem_seconds
 from campaign.schedule import after_seconds, longest_chain
 
 DEM_SAFETY = 3.0
-DEM_OVERHEAD_MIN = 2.0  # YADE start, loading a state, writing outputs
+DEM_OVERHEAD_MIN = 2.0  # the engine's start, loading a state, writing outputs
 DEM_MEM_SAFETY = 2.0
 
 
