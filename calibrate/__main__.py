@@ -28,7 +28,7 @@ def protocol_name(text: str) -> str:
 
 
 def parser() -> argparse.ArgumentParser:
-    sd, bd, rd = smoothing.SmoothingSettings(), backsolve.BacksolveSettings(), curves_integration.CurvesSettings()
+    sd, bd, rd = smoothing.SmoothingSettings(), backsolve.BacksolveSettings(), curves_integration.CurvesOptions()
     p = argparse.ArgumentParser(prog="python -m calibrate", description=__doc__.splitlines()[0])
     p.add_argument("--dem", nargs="+", required=True, metavar="CASE_DIR",
                    help="case directories results/dem/<case>/ (seeds of one pressure and I form the ensemble)")
@@ -127,9 +127,9 @@ def main(argv=None) -> int:
                                                   fine_span=a.sg_fine_span, order=a.sg_order),
             backsolve=backsolve.BacksolveSettings(rate_min=a.rate_min, skip=a.skip, bin_width=a.bin_width,
                                                   min_samples=a.min_bin_samples, cond_max=a.cond_max),
-            curves=curves_integration.CurvesSettings(max_evals=a.route2_evals, rtol=a.route2_rtol, method=a.route2_method,
-                                                     integrator=a.integrator,
-                                         mu_weight=a.mu_weight, steady_weight=a.steady_weight),
+            curves_options=curves_integration.CurvesOptions(max_evals=a.route2_evals, rtol=a.route2_rtol,
+                                                            method=a.route2_method, integrator=a.integrator,
+                                                            mu_weight=a.mu_weight),
             steady_weight=a.steady_weight, n_boot=a.bootstrap, boot_evals=a.bootstrap_evals, seed=a.seed,
             min_samples=a.min_samples, figures=not a.no_figures,
             freeform=freeform_settings(a),

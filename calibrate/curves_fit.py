@@ -167,7 +167,7 @@ def _objective(replays, base_params, model, keys, scale, steady, sigma_mu, setti
 
 
 def fit(replays, base_params: dict, model: str, start: dict, steady: dict, sigma_mu: float,
-        settings: CurvesSettings = CurvesSettings(), x_lower=None, fixed=None, batcher=None) -> FitResult:
+        settings: CurvesSettings, x_lower=None, fixed=None, batcher=None) -> FitResult:
     """Least-squares fit of the ``model`` block to the replays, from ``start``.
 
     Parameters
