@@ -33,7 +33,7 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--dem", nargs="+", required=True, metavar="CASE_DIR",
                    help="case directories results/dem/<case>/ (seeds of one pressure and I form the ensemble)")
     p.add_argument("--out", required=True, help="output directory, e.g. results/calibration")
-    p.add_argument("--protocols", nargs="+", default=list(io.REVERSAL_PROTOCOLS), type=protocol_name,
+    p.add_argument("--protocols", nargs="+", default=list(Settings.protocols), type=protocol_name,
                    help="reversal runs to learn from: heaviside, sinusoidal or a reversal schedule's name")
     g = p.add_argument_group("smoothing (Savitzky-Golay in path strain)")
     g.add_argument("--sg-fine-window", type=float, default=sd.fine_window, help="window (strain) after a reversal")
@@ -64,7 +64,7 @@ def parser() -> argparse.ArgumentParser:
                    help="model evaluations per profile point's re-fit")
     g = p.add_argument_group("other")
     g.add_argument("--steady-weight", type=float, default=Settings.steady_weight)
-    g.add_argument("--min-samples", type=int, default=io.MIN_SAMPLES, help="fewest rows accepted per DEM file")
+    g.add_argument("--min-samples", type=int, default=Settings.min_samples, help="fewest rows accepted per DEM file")
     g.add_argument("--no-figures", action="store_true")
     g = p.add_argument_group("free-form alphas (upper bound of any X-dependent Eq. 4; calibrate/freeform.py)")
     g.add_argument("--freeform", action="store_true",

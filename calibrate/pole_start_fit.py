@@ -372,10 +372,12 @@ def budget(calibrate_options: list[str]) -> tuple[int, int]:
 
 
 def main(argv=None) -> int:
+    from .settings import Settings
+
     ap = argparse.ArgumentParser(prog="python -m calibrate.pole_start_fit", description=__doc__.split("\n\n")[0])
     ap.add_argument("--dem", nargs="+", required=True, help="DEM case directories the set is calibrated on")
     ap.add_argument("--params", required=True, help="the set's params.yaml (its Eq. 2 and Model 1 start)")
-    ap.add_argument("--protocols", nargs="+", default=["heaviside", "sinusoidal"])
+    ap.add_argument("--protocols", nargs="+", default=list(Settings.protocols))
     ap.add_argument("--max-evals", type=int, default=CurvesOptions.max_evals, help="model evaluations per fit")
     ap.add_argument("--profile-points", type=int, default=PROFILE_POINTS)
     ap.add_argument("--out", required=True, help="pole_start.yaml to write (its profile CSV beside it)")
