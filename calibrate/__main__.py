@@ -28,12 +28,12 @@ def protocol_name(text: str) -> str:
 
 
 def parser() -> argparse.ArgumentParser:
-    sd, bd, rd = smoothing.SmoothingSettings(), backsolve.BacksolveSettings(), curves_integration.CurvesSettings()
+    sd, bd, rd = smoothing.SmoothingSettings(), backsolve.BacksolveSettings(), curves_integration.CurvesOptions()
     p = argparse.ArgumentParser(prog="python -m calibrate", description=__doc__.splitlines()[0])
     p.add_argument("--dem", nargs="+", required=True, metavar="CASE_DIR",
                    help="case directories results/dem/<case>/ (seeds of one pressure and I form the ensemble)")
     p.add_argument("--out", required=True, help="output directory, e.g. results/calibration")
-    p.add_argument("--protocols", nargs="+", default=list(io.REVERSAL_PROTOCOLS), type=protocol_name,
+    p.add_argument("--protocols", nargs="+", default=list(Settings.protocols), type=protocol_name,
                    help="reversal runs to learn from: heaviside, sinusoidal or a reversal schedule's name")
     g = p.add_argument_group("smoothing (Savitzky-Golay in path strain)")
     g.add_argument("--sg-fine-window", type=float, default=sd.fine_window, help="window (strain) after a reversal")
@@ -64,7 +64,7 @@ def parser() -> argparse.ArgumentParser:
                    help="model evaluations per profile point's re-fit")
     g = p.add_argument_group("other")
     g.add_argument("--steady-weight", type=float, default=Settings.steady_weight)
-    g.add_argument("--min-samples", type=int, default=io.MIN_SAMPLES, help="fewest rows accepted per DEM file")
+    g.add_argument("--min-samples", type=int, default=Settings.min_samples, help="fewest rows accepted per DEM file")
     g.add_argument("--no-figures", action="store_true")
     g = p.add_argument_group("free-form alphas (upper bound of any X-dependent Eq. 4; calibrate/freeform.py)")
     g.add_argument("--freeform", action="store_true",
@@ -127,9 +127,9 @@ def main(argv=None) -> int:
                                                   fine_span=a.sg_fine_span, order=a.sg_order),
             backsolve=backsolve.BacksolveSettings(rate_min=a.rate_min, skip=a.skip, bin_width=a.bin_width,
                                                   min_samples=a.min_bin_samples, cond_max=a.cond_max),
-            curves=curves_integration.CurvesSettings(max_evals=a.route2_evals, rtol=a.route2_rtol, method=a.route2_method,
-                                                     integrator=a.integrator,
-                                         mu_weight=a.mu_weight, steady_weight=a.steady_weight),
+            curves_options=curves_integration.CurvesOptions(max_evals=a.route2_evals, rtol=a.route2_rtol,
+                                                            method=a.route2_method, integrator=a.integrator,
+                                                            mu_weight=a.mu_weight),
             steady_weight=a.steady_weight, n_boot=a.bootstrap, boot_evals=a.bootstrap_evals, seed=a.seed,
             min_samples=a.min_samples, figures=not a.no_figures,
             freeform=freeform_settings(a),

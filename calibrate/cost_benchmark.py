@@ -111,7 +111,7 @@ def compare_tables(loop: pd.DataFrame, batched: pd.DataFrame) -> pd.DataFrame:
 def profile_cost(dirs, settings: Settings, work: Path) -> tuple:
     """CPU seconds of the X_c profile alone (``settings.profile.n_points`` re-fits, batched) and of a calibration
     with every profile (``pipeline.run``, batched), in this process."""
-    s = replace(settings, curves=replace(settings.curves, integrator="batched"))
+    s = replace(settings, curves_options=replace(settings.curves_options, integrator="batched"))
     problem = pose(dirs, s)
     backsolve = pipeline.fit_backsolve(problem, pipeline.fit_friction(problem))
     curves = pipeline.fit_curves(problem, backsolve, lambda m: None)
@@ -130,7 +130,8 @@ def run(case_dirs, data: str, out: Path, protocol_sets: dict, settings: Settings
         times, tabs = {}, {}
         for integrator in curves_integration.INTEGRATORS[::-1]:   # loop first, then batched
             o = work / name / integrator
-            times[integrator] = _timed(dirs, o, replace(s, curves=replace(s.curves, integrator=integrator)))
+            one = replace(s, curves_options=replace(s.curves_options, integrator=integrator))
+            times[integrator] = _timed(dirs, o, one)
             tabs[integrator] = pd.read_csv(o / "params_table.csv")
             log(f"{name} {integrator}: {times[integrator][0]:.1f} s wall, {times[integrator][1]:.1f} s CPU")
         cmp = compare_tables(tabs["loop"], tabs["batched"])

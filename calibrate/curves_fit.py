@@ -20,6 +20,8 @@ point seen is returned if the budget runs out.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 from scipy.optimize import least_squares
 
@@ -125,35 +127,66 @@ def counted_objective(evaluate, n_res: int, max_evals: int, batched: bool = True
     return res, workers, state
 
 
-def _objective(replays, base_params, model, keys, scale, steady, sigma_mu, settings: CurvesSettings, n_res,
-               fixed=None, batcher=None):
+@dataclass(frozen=True, eq=False)
+class FitInputs:
+    """What a curves fit holds fixed while its block moves: the runs, the parameter document holding the
+    friction laws, the model, the steady state and friction noise, the route's settings and the batcher."""
+
+    replays: list
+    base_params: dict
+    model: str
+    steady: dict
+    sigma_mu: float
+    settings: CurvesSettings
+    batcher: object = None   # calibrate.integration_batcher.IntegrationBatcher, or None: integrate at once
+
+    @property
+    def n_res(self) -> int:
+        """The residuals of one evaluation: three per sample of every run, and the steady state's."""
+        return sum(3 * len(r.s) for r in self.replays) + fits.N_STEADY
+
+
+@dataclass(frozen=True, eq=False)
+class FreeBlock:
+    """The block's parameters ``least_squares`` moves (``keys``, each in units of its ``scale``) and those
+    held at given values (``fixed``, name -> value)."""
+
+    keys: tuple
+    scale: np.ndarray
+    fixed: dict
+
+    def values(self, p) -> dict:
+        """The block's values at the scaled point ``p``: the held ones, then the moved ones."""
+        return {**self.fixed, **dict(zip(self.keys, (np.asarray(p) * self.scale).tolist()))}
+
+
+def _objective(inputs: FitInputs, block: FreeBlock):
     """The residual function of ``fit``, its ``workers`` map, and the state they keep (``counted_objective``).
 
     A trial set that cannot be integrated (pole, divergence) or cannot shear steadily
     (``shear_stability.check``) is a failed point; with the batched integrator the Jacobian's points are integrated in one batch.
-    ``fixed`` (name -> value) holds parameters of the block out of ``keys`` at those values.
     """
+    model, settings, steady = inputs.model, inputs.settings, inputs.steady
     friction = "eq2" if model == "model1" else "quadratic"
     alpha = fits.alpha_model1 if model == "model1" else fits.alpha_model2
     order = fits.M1_KEYS if model == "model1" else fits.M2_KEYS
-    fixed = dict(fixed or {})
 
     def evaluate(points):
         """Residuals of each scaled point, or None where it cannot be integrated (one batch for all)."""
         out, trials = [None] * len(points), []
         for k, p in enumerate(points):
-            vals = {**fixed, **dict(zip(keys, (np.asarray(p) * scale).tolist()))}
+            vals = block.values(p)
             try:
-                trials.append((k, vals, _with_block(base_params, model, vals)))
+                trials.append((k, vals, _with_block(inputs.base_params, model, vals)))
             except FAILURES:
                 pass
-        got = curves([(prm, model, friction) for _, _, prm in trials], replays, settings, batcher)
+        got = curves([(prm, model, friction) for _, _, prm in trials], inputs.replays, settings, inputs.batcher)
         for (k, vals, prm), c in zip(trials, got):
             try:
                 if isinstance(c, Exception):
                     raise c
-                r = fit_residuals(c, replays, sigma_mu, settings, alpha(steady["X"], *[vals[key] for key in order]),
-                                  steady)
+                r = fit_residuals(c, inputs.replays, inputs.sigma_mu, settings,
+                                  alpha(steady["X"], *[vals[key] for key in order]), steady)
                 if not np.all(np.isfinite(r)):
                     raise ValueError("non-finite residuals")
                 if not shear_stability.check_block(prm, model)["stable"]:
@@ -163,11 +196,11 @@ def _objective(replays, base_params, model, keys, scale, steady, sigma_mu, setti
                 pass
         return out
 
-    return counted_objective(evaluate, n_res, settings.max_evals, batched=settings.integrator == "batched")
+    return counted_objective(evaluate, inputs.n_res, settings.max_evals, batched=settings.integrator == "batched")
 
 
 def fit(replays, base_params: dict, model: str, start: dict, steady: dict, sigma_mu: float,
-        settings: CurvesSettings = CurvesSettings(), x_lower=None, fixed=None, batcher=None) -> FitResult:
+        settings: CurvesSettings, x_lower=None, fixed=None, batcher=None) -> FitResult:
     """Least-squares fit of the ``model`` block to the replays, from ``start``.
 
     Parameters
@@ -189,14 +222,15 @@ def fit(replays, base_params: dict, model: str, start: dict, steady: dict, sigma
     batcher : calibrate.integration_batcher.IntegrationBatcher, optional
         The batcher the calling job runs under (``curves_integration.curves``).
     """
+    inputs = FitInputs(replays, base_params, model, steady, sigma_mu, settings, batcher)
     keys, scale, lo, hi = _scaled_bounds(model, steady, settings, x_lower)
     fixed = dict(fixed or {})
     free = np.array([k not in fixed for k in keys])
-    keys, scale, lo, hi = tuple(k for k in keys if k not in fixed), scale[free], lo[free], hi[free]
-    n_res = sum(3 * len(r.s) for r in replays) + fits.N_STEADY
-    res, workers, state = _objective(replays, base_params, model, keys, scale, steady, sigma_mu, settings, n_res,
-                                     fixed, batcher)
-    x0 = np.array([start[k] for k in keys]) / scale
+    block = FreeBlock(tuple(k for k in keys if k not in fixed), scale[free], fixed)
+    lo, hi = lo[free], hi[free]
+    n_res = inputs.n_res
+    res, workers, state = _objective(inputs, block)
+    x0 = np.array([start[k] for k in block.keys]) / block.scale
     with np.errstate(invalid="ignore"):
         x0 = np.clip(x0, np.where(np.isfinite(lo), lo + 1e-9 * np.abs(lo) + 1e-12, lo),
                      np.where(np.isfinite(hi), hi - 1e-9 * np.abs(hi) - 1e-12, hi))
@@ -208,7 +242,7 @@ def fit(replays, base_params: dict, model: str, start: dict, steady: dict, sigma
     except BudgetExhausted:
         message = f"budget of {settings.max_evals} model evaluations used up; best point kept"
     p = state["best"] if state["best"] is not None else x0
-    vals = {**fixed, **dict(zip(keys, (p * scale).tolist()))}
+    vals = block.values(p)
     vals = {k: vals[k] for k in (fits.M1_KEYS if model == "model1" else fits.M2_KEYS)}
     n_data = n_res - fits.N_STEADY
     rms = float(np.sqrt(2 * state["best_cost"] / max(n_res, 1)))

@@ -8,7 +8,7 @@ This module integrates the model along every replay for each parameter set it is
 
 Integrator
 ----------
-``CurvesSettings.integrator`` chooses how the runs are integrated:
+``CurvesOptions.integrator`` chooses how the runs are integrated:
 
 - ``"batched"`` (default): every integration of one residual evaluation (all
   runs), and of one finite-difference Jacobian (the n + 1 parameter sets of the
@@ -42,9 +42,14 @@ FAILURES = (PoleError, ValueError, FloatingPointError, RuntimeError)
 
 
 @dataclass(frozen=True)
-class CurvesSettings:
-    """The curves route's settings: its integration (``method`` to ``max_steps``, ``integrator``; this module) and
-    its fit (``diff_step`` to ``xc_margin``; ``calibrate.curves_fit``), one record written to params.yaml."""
+class CurvesOptions:
+    """The curves route's own settings, the home of their defaults: its integration (``method`` to
+    ``max_steps``, ``integrator``; this module) and its fit's (``diff_step`` to ``mu_weight``;
+    ``calibrate.curves_fit``).
+
+    The fit also weighs the steady state and bounds X_c as the back-solve does: ``CurvesSettings``
+    adds those two settings of the whole calibration (``calibrate.settings.Settings.curves`` builds it).
+    """
 
     method: str = "LSODA"   # switches to an implicit method where a trial set makes Eq. 4 stiff
     rtol: float = 1e-6
@@ -53,16 +58,26 @@ class CurvesSettings:
     diff_step: float = 1e-3
     max_evals: int = 300   # Model 1 on the quick campaign used 150 up before converging
     mu_weight: float = 1.0
-    steady_weight: float = 1.0
-    xc_margin: float = 2e-3
     integrator: str = "batched"  # or "loop": model.simulate one run at a time (module Notes)
 
     def __post_init__(self):
         if self.integrator not in INTEGRATORS:
             raise ValueError(f"curves route: integrator = {self.integrator!r} is not one of {INTEGRATORS}")
 
+
+@dataclass(frozen=True, kw_only=True)
+class CurvesSettings(CurvesOptions):
+    """The curves route's settings (``CurvesOptions``) with the calibration's ``steady_weight`` and ``xc_margin``
+    (no default here: ``calibrate.settings.Settings`` is their one home, ``Settings.curves`` builds this record),
+    one record written to params.yaml."""
+
+    steady_weight: float
+    xc_margin: float
+
     def as_dict(self) -> dict:
-        return asdict(self)
+        """The record, in the order released params.yaml files carry (``integrator`` last)."""
+        d = asdict(self)
+        return {**{k: v for k, v in d.items() if k != "integrator"}, "integrator": d["integrator"]}
 
 
 def replay_run(params, replay: Replay, model: str, friction: str, settings: CurvesSettings, cache=None):

@@ -15,6 +15,8 @@ X (:math:`-X_{ss}`), the mirrored X of every run just before its reversal (and
 the 97.5 % prediction bound of it for a new seed) and the largest X of any
 fitted bin, plus ``xc_margin`` (``xc_lower_bound``), so a reversal from a
 calibration run's state, or most likely a new one's, starts below the pole.
+``steady_weight`` and ``xc_margin`` are the caller's (``calibrate.settings.Settings`` holds
+their defaults, for this fit and the curves route's alike).
 
 Fabric fits (Eq. 6, Model 2) use the back-solved bins (``backsolve.binned``,
 ``used`` ones only), each whitened by its 2x2 covariance. Friction fits use
@@ -95,7 +97,7 @@ def steady_fabric_residuals(alpha1, alpha2, steady, weight):
 # --------------------------------------------------------------------------- friction
 
 
-def fit_eq2(X, mu, sigma_mu, steady, steady_weight=1.0, x0=(0.028, 2.7, 20.0, 9.0e4)) -> FitResult:
+def fit_eq2(X, mu, sigma_mu, steady, steady_weight, x0=(0.028, 2.7, 20.0, 9.0e4)) -> FitResult:
     r"""Fit Eq. 2, :math:`\mu(X; X_0, k_1, k_3, k_5)`, through its signed form ``model.laws.stress_ratio_eq2``.
 
     Parameters
@@ -128,7 +130,7 @@ def fit_eq2(X, mu, sigma_mu, steady, steady_weight=1.0, x0=(0.028, 2.7, 20.0, 9.
                      bool(best.success), best.message)
 
 
-def fit_quadratic(X, mu, sigma_mu, steady, steady_weight=1.0) -> FitResult:
+def fit_quadratic(X, mu, sigma_mu, steady, steady_weight) -> FitResult:
     r"""Fit :math:`\mu = m_0 + m_1 X + m_2 X^2` ([15]; ``model.laws.friction_quadratic``): linear least squares."""
     X, mu = np.asarray(X, float), np.asarray(mu, float)
     G = np.stack([np.ones_like(X), X, X**2], axis=1) / sigma_mu
@@ -184,7 +186,7 @@ def xc_lower_bound(steady, margin, bins=None):
     return max(xs) + margin
 
 
-def fit_model1(bins, steady, steady_weight=1.0, xc_margin=2e-3, x0=None) -> FitResult:
+def fit_model1(bins, steady, steady_weight, xc_margin, x0=None) -> FitResult:
     r"""Fit Eq. 6 to the used back-solved bins (``model.laws.alpha_model1``).
 
     .. math::
@@ -235,7 +237,7 @@ def fit_model1(bins, steady, steady_weight=1.0, xc_margin=2e-3, x0=None) -> FitR
                      bool(best.success), best.message, {"X_c_lower_bound": xc_lo})
 
 
-def fit_model2(bins, steady, steady_weight=1.0) -> FitResult:
+def fit_model2(bins, steady, steady_weight) -> FitResult:
     r"""Fit Model 2, :math:`\alpha_1 = c_1`, :math:`\alpha_2 = c_2 + c_3 X` (``model.laws.alpha_model2``), to the used bins."""
     b = bins[bins["used"]].reset_index(drop=True)
     if len(b) < 2:

@@ -51,7 +51,7 @@ from model.pole_start import (DELTA_MIN, FORMAT_TAG, KEYS, block_params, far_pol
                               mirrored_x, with_pole)
 
 from . import curves_fit, curves_integration, fits, profiles
-from .curves_integration import FAILURES, CurvesSettings
+from .curves_integration import FAILURES, CurvesOptions, CurvesSettings
 
 SCALE = np.array([1.0, 10.0, 1e3, 1.0, 10.0, 1e3, 0.01])
 DELTA_MAX = 0.4
@@ -162,7 +162,7 @@ def _objective(replays, base_doc, steady, sigma_mu, settings: CurvesSettings, n_
 
 
 def fit(replays, base_doc: dict, start: dict, steady: dict, sigma_mu: float,
-        settings: CurvesSettings = CurvesSettings(), fixed=None) -> fits.FitResult:
+        settings: CurvesSettings, fixed=None) -> fits.FitResult:
     """Least-squares fit of a_i, b_i, c_i and delta (``KEYS``) from ``start``; ``fixed`` holds some at given values.
 
     ``extra`` holds ``evaluations``, ``failed_evaluations`` and ``residuals`` (the
@@ -314,7 +314,7 @@ def profile_interval(prof: pd.DataFrame) -> dict:
     return {"low": lo, "high": hi, "identified": bool(ok_lo and ok_hi), "note": "; ".join(notes)}
 
 
-def run(case_dirs, params_path, protocols, out_yaml, max_evals: int = CurvesSettings.max_evals,
+def run(case_dirs, params_path, protocols, out_yaml, max_evals: int = CurvesOptions.max_evals,
         profile_points: int = PROFILE_POINTS, log=print) -> dict:
     """Fit the variant on ``case_dirs`` (their ``protocols``) from the set's ``params.yaml``; write it and its profile.
 
@@ -372,11 +372,13 @@ def budget(calibrate_options: list[str]) -> tuple[int, int]:
 
 
 def main(argv=None) -> int:
+    from .settings import Settings
+
     ap = argparse.ArgumentParser(prog="python -m calibrate.pole_start_fit", description=__doc__.split("\n\n")[0])
     ap.add_argument("--dem", nargs="+", required=True, help="DEM case directories the set is calibrated on")
     ap.add_argument("--params", required=True, help="the set's params.yaml (its Eq. 2 and Model 1 start)")
-    ap.add_argument("--protocols", nargs="+", default=["heaviside", "sinusoidal"])
-    ap.add_argument("--max-evals", type=int, default=CurvesSettings.max_evals, help="model evaluations per fit")
+    ap.add_argument("--protocols", nargs="+", default=list(Settings.protocols))
+    ap.add_argument("--max-evals", type=int, default=CurvesOptions.max_evals, help="model evaluations per fit")
     ap.add_argument("--profile-points", type=int, default=PROFILE_POINTS)
     ap.add_argument("--out", required=True, help="pole_start.yaml to write (its profile CSV beside it)")
     args = ap.parse_args(argv)

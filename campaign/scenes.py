@@ -8,7 +8,7 @@ import copy
 import json
 from pathlib import Path
 
-from .schema_defaults import cell_kind
+from .schema_defaults import cell_kind, dem_engine
 
 # Config blocks copied into the scene as they are (the config's names are the scene's).
 PASSTHROUGH = ["timestep", "pack", "preshear", "sampling", "effects", "run", "guards"]
@@ -41,7 +41,7 @@ def scene_from_config(config: dict, case: dict, label: str) -> dict:
         "material": {**config["material"], "pressure": case["pressure"]},
         "loading": {"inertial_number": case["inertial_number"]},
     }
-    if config.get("engine", "yade") != "yade":   # a YADE scene stays as it was before engines existed (same rerun key)
+    if dem_engine(config) != "yade":   # a YADE scene stays as it was before engines existed (same rerun key)
         scene["engine"] = config["engine"]
     if kind != "walls":   # a wall cell's scene stays as it was before cell kinds existed (same rerun key)
         scene["cell"] = {k: cell[k] for k in ("kind", "mass") if k in cell}

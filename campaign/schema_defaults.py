@@ -46,6 +46,11 @@ def cell_kind(config: dict) -> str:
     return (config.get("cell") or {}).get("kind", default("cell", "kind"))
 
 
+def dem_engine(config: dict) -> str:
+    """The campaign's DEM engine (``engine``), the schema's default where the config (not yet validated) has none."""
+    return config.get("engine", default("engine"))
+
+
 def with_defaults(config: dict, path=SCHEMA) -> dict:
     """``config`` with the schema's defaults filled in, in place, as the Snakefile's ``validate`` fills them
     (``snakemake.utils.validate``): for a command that reads config files without Snakemake. It raises

@@ -31,7 +31,7 @@ from campaign.calibration_sets import calibration_sets, same_value
 from campaign.cases import cases, rates
 from campaign.configfile import ConfigProblem, configfile_problems, load_configfile  # noqa: F401 (re-exported)
 from campaign.scene_spec import inertial_number_range, lammps_refusals, protocol_strain, scene_default, scene_module
-from campaign.schema_defaults import SCHEMA, cell_kind, schema as read_schema
+from campaign.schema_defaults import SCHEMA, cell_kind, dem_engine, schema as read_schema
 from campaign.scenes import scene_from_config
 from dem_contract.labels import case_label, format_number
 
@@ -384,8 +384,7 @@ def engine_problems(config: dict, root=ROOT) -> list[str]:
     """With ``engine: lammps``, what lammps_scripts does not run (lammps_scripts/refusals.py), by key:
     the bulk-vs-walls study (its periodic cells) and every scene setting it refuses. Every protocol
     runs (heaviside, sinusoidal, every schedule and train)."""
-    engine = config.get("engine", "yade")
-    if engine != "lammps":
+    if dem_engine(config) != "lammps":
         return []
     mod = lammps_refusals(root)
     out = []

@@ -1,4 +1,4 @@
-"""The curves route with the batched integrator (``CurvesSettings.integrator``) against the per-run loop.
+"""The curves route with the batched integrator (``CurvesOptions.integrator``) against the per-run loop.
 
 Model-made cases (``calibrate.synthetic``, known parameters, DEM-magnitude noise):
 the residuals of the two paths agree to 1e-6 (in units of the sample noise) at
@@ -13,16 +13,18 @@ import pytest
 
 import model.batched
 from calibrate import curves_fit, curves_integration, dem_replays, synthetic
-from calibrate.curves_integration import CurvesSettings, curves
+from calibrate.curves_integration import CurvesOptions, curves
 from calibrate.integration_batcher import IntegrationBatcher
 from calibrate.backsolve import BacksolveSettings
 from calibrate.io import read_cases, steady_values
+from calibrate.settings import Settings
 from calibrate.smoothing import smooth_cases
 from model import PoleError, params_from_dict
 from tests.helpers import TRUTH_M1, truth_params
 
 SIGMA_MU = 0.04
 TIGHT = dict(rtol=1e-10, atol=1e-12)
+DEFAULT = Settings().curves   # the curves route's settings in a calibration's defaults
 
 
 @pytest.fixture(scope="module")
@@ -40,7 +42,7 @@ def with_model1(**changes):
 
 def test_batched_and_loop_residuals_agree_to_1e6(replays):
     reps, _ = replays
-    loop = CurvesSettings(integrator="loop", **TIGHT)
+    loop = replace(DEFAULT, integrator="loop", **TIGHT)
     for prm, model, friction in ((truth_params(), "model1", "eq2"), (truth_params(), "model2", "quadratic"),
                                  (with_model1(a1=-1.0, c2=2500.0), "model1", "eq2")):
         r_loop = curves_fit.residuals(prm, reps, model, friction, SIGMA_MU, loop)
@@ -50,7 +52,7 @@ def test_batched_and_loop_residuals_agree_to_1e6(replays):
 
 def test_a_failing_parameter_set_in_a_batch_fails_alone(replays):
     reps, _ = replays
-    s = CurvesSettings()
+    s = DEFAULT
     good, other = truth_params(), with_model1(a1=-1.0)
     pole = with_model1(X_c=0.05)   # every reversal starts at X of about 0.075 > X_c
     got = curves([(good, "model1", "eq2"), (pole, "model1", "eq2"), (other, "model1", "eq2")], reps, s)
@@ -82,19 +84,19 @@ def test_the_integrator_option_selects_the_path(replays, monkeypatch):
     reps, _ = replays
     batch_calls = count_calls(monkeypatch, curves_integration, "simulate_batch")
     loop_calls = count_calls(monkeypatch, curves_integration, "simulate")
-    curves_fit.residuals(truth_params(), reps, "model1", "eq2", SIGMA_MU, CurvesSettings(integrator="loop"))
+    curves_fit.residuals(truth_params(), reps, "model1", "eq2", SIGMA_MU, replace(DEFAULT, integrator="loop"))
     assert (len(batch_calls), len(loop_calls)) == (0, len(reps))
-    curves_fit.residuals(truth_params(), reps, "model1", "eq2", SIGMA_MU, CurvesSettings())
+    curves_fit.residuals(truth_params(), reps, "model1", "eq2", SIGMA_MU, DEFAULT)
     assert (len(batch_calls), len(loop_calls)) == (1, len(reps))
     with pytest.raises(ValueError, match="integrator"):
-        CurvesSettings(integrator="rk4")
+        CurvesOptions(integrator="rk4")
 
 
 def test_a_fit_batches_its_jacobian_and_matches_the_loop(replays, monkeypatch):
     reps, steady = replays
     doc = truth_params().to_dict()
     start = {**TRUTH_M1, "a1": -0.8, "a2": -4.5}
-    loop = CurvesSettings(integrator="loop", max_evals=40, **TIGHT)
+    loop = replace(DEFAULT, integrator="loop", max_evals=40, **TIGHT)
     f_loop = curves_fit.fit(reps, doc, "model1", start, steady, SIGMA_MU, loop)
     calls = count_calls(monkeypatch, model.batched, "simulate_batch")
     monkeypatch.setattr(curves_integration, "simulate_batch", model.batched.simulate_batch)
@@ -108,7 +110,7 @@ def test_a_fit_batches_its_jacobian_and_matches_the_loop(replays, monkeypatch):
 
 def test_jobs_under_one_batcher_get_what_they_get_alone_in_fewer_batches(replays, monkeypatch):
     reps, _ = replays
-    s = CurvesSettings()
+    s = DEFAULT
     sets = [with_model1(a1=a1) for a1 in (-0.8, -0.85, -0.9)] + [with_model1(X_c=0.05)]
     alone = [curves([(p, "model1", "eq2")], reps[: 1 + k % 3], s)[0] for k, p in enumerate(sets)]
     calls = count_calls(monkeypatch, curves_integration, "simulate_batch")

@@ -4,6 +4,7 @@ import pandas as pd
 import pytest
 
 from calibrate import fits, tables
+from calibrate.settings import Settings
 from model.laws import friction_eq2, stress_ratio_eq2
 
 TRUE_EQ2 = dict(X0=0.035, k1=2.4, k3=15.0, k5=2.0e4)
@@ -22,7 +23,7 @@ def test_eq2_fit_recovers_its_parameters_from_signed_samples_on_both_sides_of_X0
     X = np.linspace(-0.12, 0.11, 400)                     # y from -0.155 to +0.075: both branches
     tau = stress_ratio_eq2(X, **TRUE_EQ2)
     steady = {"X": -0.08, "mu": stress_ratio_eq2(-0.08, **TRUE_EQ2), "se_mu": 0.01}
-    fit = fits.fit_eq2(X, tau, 0.01, steady)
+    fit = fits.fit_eq2(X, tau, 0.01, steady, Settings.steady_weight)
     for k, v in TRUE_EQ2.items():
         assert fit.values[k] == pytest.approx(v, rel=1e-4), k
     assert fit.rms < 1e-8
@@ -76,6 +77,6 @@ def test_fabric_fits_keep_the_steady_state_stable_even_when_the_dem_fabric_leans
                          "se_alpha2": 50.0, "cov12": 0.0, "used": True})   # weak bins pulling to the flipped side
     a, b, Xs = steady_state_constant(0.3, 2.7)                               # a > 0: theta_A above 135 deg
     steady = {"A_xx": a, "A_xy": b, "X": Xs, "se_A_xx": 1e-4, "se_A_xy": 1e-4}
-    fit = fits.fit_model2(bins, steady)
+    fit = fits.fit_model2(bins, steady, Settings.steady_weight)
     assert fit.values["c2"] + fit.values["c3"] * Xs < 0      # alpha2 at the steady X: a stable steady state
     assert fits.steady_fabric_residuals(-1.0, -12.0, steady, 1.0)[2] == 0.0

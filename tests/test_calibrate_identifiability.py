@@ -15,7 +15,7 @@ import pandas as pd
 import pytest
 from scipy import stats
 
-from calibrate import bootstrap, coverage, curves_fit, curves_integration, identifiability, profiles, synthetic
+from calibrate import bootstrap, coverage, curves_fit, identifiability, profiles, synthetic
 from calibrate.problem import pose
 from calibrate.settings import Settings
 from model import default_params, params_from_dict
@@ -106,7 +106,7 @@ def model2_replays(tmp_path_factory):
 def test_curve_fit_holds_a_fixed_parameter_and_refits_the_others(model2_replays):
     reps, steady, d, _ = model2_replays
     start = dict(c1=-1.0, c2=-10.0, c3=0.0)
-    f = curves_fit.fit(reps, d, "model2", start, steady, 0.04, curves_integration.CurvesSettings(max_evals=60),
+    f = curves_fit.fit(reps, d, "model2", start, steady, 0.04, dataclasses.replace(Settings().curves, max_evals=60),
                        fixed={"c2": -19.6})
     assert f.values["c2"] == -19.6 and list(f.values) == ["c1", "c2", "c3"]
     assert f.values["c1"] == pytest.approx(-1.6, rel=0.1)   # the others move to the truth
@@ -114,7 +114,7 @@ def test_curve_fit_holds_a_fixed_parameter_and_refits_the_others(model2_replays)
 
 def test_model2_profiles_are_finite_about_the_fit_and_the_sensitivity_matrix_has_full_rank(model2_replays):
     reps, steady, d, problem = model2_replays
-    s2 = curves_integration.CurvesSettings()
+    s2 = Settings().curves
     f = curves_fit.fit(reps, d, "model2", d["model2"], steady, 0.04, s2)
     prof = profiles.profile(problem, d, "model2", f.values, names=("c1", "c2"))
     assert len(prof) == 2 * 9 and (prof["delta"].dropna() >= 0).all()

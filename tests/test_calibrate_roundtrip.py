@@ -68,7 +68,7 @@ def test_dem_noise_round_trip_friction_and_curves(dem_noise_run):
     assert abs(p.friction_eq2.X0 - 0.028) < 0.002 and rel(p.friction_eq2.k1, 2.7) < 0.07
     cases = read_cases(dirs)
     reps = dem_replays.prepare(cases, smooth_cases(cases), BacksolveSettings())
-    s = curves_integration.CurvesSettings()
+    s = pipeline.Settings().curves
     true_curves = curves_integration.replay_run(truth_params(), reps[0], "model1", "eq2", s)
     fit_curves = curves_integration.replay_run(p, reps[0], "model1", "eq2", s)
     dA = fabric_norm(true_curves[:, 0], true_curves[:, 1]) - fabric_norm(fit_curves[:, 0], fit_curves[:, 1])

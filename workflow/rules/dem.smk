@@ -27,7 +27,7 @@ LAMMPS_STAGE = (
     "OMP_NUM_THREADS=1 python3 lammps_scripts/run_stage.py"
     " {input.scene:q} {params.stage:q} {params.case_dir:q} --log {log:q}"
 )
-ENGINE = config.get("engine", "yade")
+ENGINE = config["engine"]  # the schema's default filled in (the Snakefile's validate)
 DEM_STAGE = {"yade": YADE_STAGE, "lammps": LAMMPS_STAGE}[ENGINE]
 # A stage's final state, the next stage's input: YADE's O.save, or a LAMMPS restart file
 # (lammps_scripts/shearing.py STATE_SUFFIX).
