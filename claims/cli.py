@@ -12,6 +12,8 @@ r"""Command line of the claims stage.
     python -m claims plan --table results/claims/paper_claims.csv --dem results/dem/<case> ... \
         [--protocols heaviside sinusoidal ...] --out results/claims/plan.csv
         # -> seeds and core-hours that decide every undecided claim (claims.plan)
+    python -m claims across --table yade=<paper_claims.csv> --table lammps=<paper_claims.csv> --out <folder>
+        # -> claims_across.csv/.md: two campaigns' verdicts side by side, engine-dependent rows (claims.across)
 
 Bad input (a missing table or column, a bad DEM file) exits with status 2 and
 a message naming the file.
@@ -25,7 +27,7 @@ from pathlib import Path
 
 from dem_contract import REVERSAL_PROTOCOLS, DEMInputError
 
-from . import design, eq2, inputs, plan, pole_start_claim, power, report, table
+from . import across, design, eq2, inputs, plan, pole_start_claim, power, report, table
 
 
 def build_parser():
@@ -62,6 +64,8 @@ def main(argv=None) -> int:
     argv = sys.argv[1:] if argv is None else list(argv)
     if argv[:1] == ["plan"]:
         return plan.main(argv[1:])
+    if argv[:1] == ["across"]:
+        return across.main(argv[1:])
     args = build_parser().parse_args(argv)
     t0 = time.perf_counter()
     try:

@@ -1,0 +1,150 @@
+r"""The same claims decided on two campaigns (two engines, or two cells), side by side.
+
+``python -m claims across --table yade=<paper_claims.csv> --table lammps=<paper_claims.csv> --out <folder>``
+writes ``claims_across.csv`` and ``claims_across.md``: one row per claim id the two tables share,
+each table's estimate, 90 % interval and verdict, and
+
+- ``same_verdict``: whether the two verdicts are the same; a row where they differ is reported
+  as **engine-dependent** (``dependent_word``: cell-dependent for two cells);
+- the difference of the two estimates and its z,
+
+  .. math:: z = \frac{\hat\theta_1 - \hat\theta_2}{\sqrt{s_1^2/n_1 + s_2^2/n_2}}
+
+  (``sd`` and ``n`` of each row: its seed-to-seed s.d. and seeds, claims.table), with a two-sided
+  p-value from the normal distribution, and ``estimates_differ`` at family-wise 5 % over the rows
+  (two-sided, ``FAMILY_ALPHA`` = 10 %: the table's one level, 5 % a side; Holm, ``stats.holm``): a verdict can differ between the campaigns while their estimates agree
+  within seed noise (the two intervals straddle a null or a margin), which is a different finding
+  from estimates that differ.
+
+Rows without a finite ``sd`` or ``n`` < 2 in either table get no z and are left out of the Holm
+family. Data never executes: labels are checked to be plain words.
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import re
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from scipy import stats as sps
+
+from .stats import ALPHA, holm
+
+#: Columns a claims table must hold to be set beside another.
+NEEDED = ("claim_id", "estimate", "low", "high", "sd", "n", "verdict")
+#: The estimates' difference is tested two-sided at the table's one level (90 % intervals: 5 % a side), family-wise.
+FAMILY_ALPHA = 2 * ALPHA
+LABEL = re.compile(r"^[A-Za-z][A-Za-z0-9_.-]{0,39}$")
+
+
+def read_table(path) -> pd.DataFrame:
+    """A claims table (``paper_claims.csv``) with the columns ``NEEDED``; ValueError naming what is missing."""
+    table = pd.read_csv(path)
+    missing = [c for c in NEEDED if c not in table.columns]
+    if missing:
+        raise ValueError(f"{path}: not a claims table (missing columns {', '.join(missing)})")
+    return table
+
+
+def across(first: pd.DataFrame, second: pd.DataFrame, labels=("yade", "lammps")) -> pd.DataFrame:
+    """One row per shared claim id: both tables' estimate, interval and verdict, the z of their difference.
+
+    Parameters
+    ----------
+    first, second : DataFrame
+        Claims tables (``read_table``), e.g. the same campaign run by two engines.
+    labels : pair of str
+        The two campaigns' names, used as column prefixes.
+
+    Returns
+    -------
+    DataFrame
+        ``claim_id``, ``<label>_estimate``, ``_low``, ``_high``, ``_n``, ``_verdict`` for each label,
+        ``same_verdict``, ``difference`` (first - second), ``z``, ``p`` (two-sided), ``estimates_differ``
+        (Holm at family-wise ``FAMILY_ALPHA`` over the rows with a z), in the first table's row order.
+    """
+    a, b = labels
+    keep = ["claim_id", "estimate", "low", "high", "sd", "n", "verdict"]
+    merged = first[keep].merge(second[keep], on="claim_id", suffixes=(f"_{a}", f"_{b}"), how="inner", sort=False)
+    se2 = merged[f"sd_{a}"] ** 2 / merged[f"n_{a}"] + merged[f"sd_{b}"] ** 2 / merged[f"n_{b}"]
+    ok = (merged[f"n_{a}"] >= 2) & (merged[f"n_{b}"] >= 2) & np.isfinite(se2) & (se2 > 0)
+    merged["same_verdict"] = merged[f"verdict_{a}"] == merged[f"verdict_{b}"]
+    merged["difference"] = merged[f"estimate_{a}"] - merged[f"estimate_{b}"]
+    merged["z"] = np.where(ok, merged["difference"] / np.sqrt(se2.where(ok, 1.0)), math.nan)
+    merged["p"] = np.where(ok, 2 * sps.norm.sf(np.abs(merged["z"].fillna(0.0))), math.nan)
+    differ = np.zeros(len(merged), dtype=bool)
+    if ok.any():
+        differ[ok.to_numpy()] = holm(merged.loc[ok, "p"].to_numpy(), alpha=FAMILY_ALPHA)
+    merged["estimates_differ"] = differ
+    return merged.drop(columns=[f"sd_{a}", f"sd_{b}"])
+
+
+def dependent_word(labels) -> str:
+    """'engine-dependent' for two engines (yade, lammps), else '<a>/<b>-dependent'."""
+    return "engine-dependent" if set(labels) == {"yade", "lammps"} else f"{labels[0]}/{labels[1]}-dependent"
+
+
+def markdown(table: pd.DataFrame, labels=("yade", "lammps")) -> str:
+    """The side-by-side table as Markdown: estimate [90 % interval] and verdict per campaign, the z, the reading."""
+    a, b = labels
+    word = dependent_word(labels)
+
+    def cell(r, lab):
+        return (f"{r[f'estimate_{lab}']:.3g} [{r[f'low_{lab}']:.3g}, {r[f'high_{lab}']:.3g}] "
+                f"(n {r[f'n_{lab}']:.0f}): **{r[f'verdict_{lab}']}**")
+
+    lines = [f"| claim | {a} | {b} | z of the difference | reading |", "|---|---|---|---|---|"]
+    for _, r in table.iterrows():
+        z = "-" if not np.isfinite(r["z"]) else f"{r['z']:+.2f}" + (" (differ, Holm)" if r["estimates_differ"] else "")
+        if r["same_verdict"]:
+            reading = "same verdict"
+        elif not np.isfinite(r["z"]):
+            reading = f"{word} verdict; too few seeds for a z"
+        elif r["estimates_differ"]:
+            reading = f"{word}: the estimates differ"
+        else:
+            reading = f"{word} verdict; the estimates agree within seed noise"
+        lines.append(f"| {r['claim_id']} | {cell(r, a)} | {cell(r, b)} | {z} | {reading} |")
+    n_dep = int((~table["same_verdict"]).sum())
+    n_diff = int(table["estimates_differ"].sum())
+    lines += ["", f"{len(table)} rows; {n_dep} with verdicts that differ ({word}); {n_diff} whose estimates differ at "
+                  f"family-wise {FAMILY_ALPHA:.0%} (Holm over the {int(np.isfinite(table['z']).sum())} rows with a z)."]
+    return "\n".join(lines) + "\n"
+
+
+def parse_table_arg(text: str):
+    """``LABEL=PATH`` -> (label, Path); ValueError for a bad label (a plain word: letters, digits, _ . -)."""
+    label, sep, path = text.partition("=")
+    if not (sep and path):
+        raise ValueError(f"--table {text!r}: expected LABEL=paper_claims.csv, e.g. yade=results/claims/paper_claims.csv")
+    if not LABEL.match(label):
+        raise ValueError(f"--table {text!r}: the label must be a plain word (letters, digits, _ . -; at most 40)")
+    return label, Path(path)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m claims across",
+                                 description="Two claims tables side by side: verdicts, and whether the estimates differ.")
+    ap.add_argument("--table", action="append", required=True, metavar="LABEL=CSV",
+                    help="a claims table with its label; give it twice (the first is the reference)")
+    ap.add_argument("--out", required=True, help="folder for claims_across.csv and claims_across.md")
+    args = ap.parse_args(argv)
+    try:
+        if len(args.table) != 2:
+            raise ValueError(f"--table given {len(args.table)} times: give it exactly twice")
+        (la, pa), (lb, pb) = map(parse_table_arg, args.table)
+        if la == lb:
+            raise ValueError(f"--table: the two labels are both {la!r}")
+        table = across(read_table(pa), read_table(pb), (la, lb))
+        out = Path(args.out)
+        out.mkdir(parents=True, exist_ok=True)
+        table.to_csv(out / "claims_across.csv", index=False, float_format="%.6g")
+        (out / "claims_across.md").write_text(markdown(table, (la, lb)))
+    except (ValueError, OSError) as exc:
+        print(f"claims across: error: {exc}", file=sys.stderr)
+        return 2
+    print(f"claims across: {len(table)} rows, {int((~table['same_verdict']).sum())} verdicts differ -> {out}")
+    return 0
