@@ -201,7 +201,8 @@ def main(argv=None) -> int:
     g.add_argument("--yade", required=True, help="YADE's cases: a folder of case folders (<results_dir>/dem) or a "
                                                  "data release (data/<name> or its cases/)")
     g.add_argument("--lammps", required=True, help="LAMMPS's cases, as --yade")
-    g.add_argument("--stage", default="heaviside", help="the reversal stage compared (heaviside, sinusoidal, a schedule)")
+    g.add_argument("--stage", default="heaviside",
+                   help="the reversal stage compared (heaviside, sinusoidal, a schedule)")
     g.add_argument("--out", required=True, help="output folder")
     g.add_argument("--name", default="engines", help="file name prefix: <name>_agreement.csv/.md/.json, "
                                                      "<name>_cost.csv, <name>_transients.png")

@@ -201,6 +201,7 @@ def cost_table(cases: pd.DataFrame, cells: pd.DataFrame, stage: str) -> pd.DataF
         cell = cells.set_index("cell").loc[engine]
         rows.append(dict(engine=engine, engine_recorded=", ".join(sorted({x["engine_recorded"] for x in t})),
                          seeds=len(t), N=int(cell["N"]), core_hours_per_seed=float(cell["core_hours_per_seed"]),
+                         core_hours_pack_per_seed=float(cell["core_hours_pack_per_seed"]),
                          core_hours_preshear_per_seed=float(cell["core_hours_preshear_per_seed"]),
                          core_hours_reversal_per_seed=float(cell["core_hours_reversal_per_seed"]),
                          shear_steps_per_seed=float(np.mean([x["steps"] for x in t])),
@@ -298,8 +299,8 @@ def markdown(table: pd.DataFrame, cost: pd.DataFrame, info: dict) -> str:
     ref, other = info["engines"]
     rule = (f"agrees: |z| <= {info['match_se']:g} (family: |z| <= {info['family_z']:.2f}, Bonferroni over "
             f"{info['family_size']} steady quantities at {info['family_alpha']:.0%})")
-    lines = [f"Stage `{info['stage']}`; {ref} (reference) against {other}; steady values over the "
-             f"{info['steady_window'] if isinstance(info['steady_window'], str) else 'last ' + str(info['steady_window'])}"
+    window = info["steady_window"] if isinstance(info["steady_window"], str) else f"last {info['steady_window']:g}"
+    lines = [f"Stage `{info['stage']}`; {ref} (reference) against {other}; steady values over the {window}"
              f" of the pre-shear; seed mean +- standard error; d = {other} - {ref}, z = d / sqrt(SE1^2 + SE2^2); "
              f"{rule}.", "",
              f"| quantity | {ref} | {other} | seeds | difference | z | agrees | agrees (family) |",
@@ -317,13 +318,14 @@ def markdown(table: pd.DataFrame, cost: pd.DataFrame, info: dict) -> str:
     for _, r in table[table["kind"] == "transient"].iterrows():
         lines.append(f"| {r['quantity']} | {_fmt(r['rms_difference'])} | {_fmt(r['rms_noise'])} "
                      f"| {r['noise_ratio']:.2f} | {r['difference']:+.4g} | {'yes' if r['agrees'] else '**no**'} |")
-    lines += ["", "Cost, from the sidecars: core-hours per seed (pack + pre-shear + reversal CPU) and particle-steps "
-              "per CPU second of the shear stages (N x steps / CPU s).", "",
-              "| engine | recorded | seeds | N | core-hours per seed | pre-shear | reversal "
-              "| particle-steps per CPU s | ratio |", "|---|---|---|---|---|---|---|---|---|"]
+    lines += ["", "Cost, from the sidecars: core-hours per seed (pack + pre-shear + reversal CPU, each stage beside "
+              "it) and particle-steps per CPU second of the shear stages (N x steps / CPU s).", "",
+              "| engine | recorded | seeds | N | core-hours per seed | pack | pre-shear | reversal "
+              "| particle-steps per CPU s | ratio |", "|---|---|---|---|---|---|---|---|---|---|"]
     for _, c in cost.iterrows():
         lines.append(f"| {c['engine']} | {c['engine_recorded']} | {c['seeds']} | {c['N']} "
-                     f"| {c['core_hours_per_seed']:.4f} | {c['core_hours_preshear_per_seed']:.4f} "
+                     f"| {c['core_hours_per_seed']:.4f} | {c['core_hours_pack_per_seed']:.4f} "
+                     f"| {c['core_hours_preshear_per_seed']:.4f} "
                      f"| {c['core_hours_reversal_per_seed']:.4f} | {c['particle_steps_per_cpu_s']:.3g} "
                      f"| {c['throughput_ratio']:.2f} |")
     diff = info["scene_differences"]

@@ -76,7 +76,8 @@ def test_the_transient_rows_repeat_the_studys_rms_difference_and_seed_noise(stud
     for q, row in tr.iterrows():
         assert row["rms_difference"] == pytest.approx(pub[f"transient_{q}_rms"], rel=1e-4)
         assert row["rms_noise"] == pytest.approx(pub[f"transient_{q}_noise"], rel=1e-4)
-        assert row["noise_ratio"] == pytest.approx(row["rms_difference"] / row["rms_noise"], rel=1e-5)   # 6 digits in the CSV
+        # the CSV holds 6 digits
+        assert row["noise_ratio"] == pytest.approx(row["rms_difference"] / row["rms_noise"], rel=1e-5)
         assert bool(row["agrees"]) == (row["rms_difference"] <= 2 * row["rms_noise"])
 
 
