@@ -77,10 +77,14 @@ class CaseResult:
     transients: list = None     # each transient's curves (one for a single reversal)
 
 
-def load_case(case_dir, case: str, steady_window: float, edges: np.ndarray, stage: str = "heaviside") -> CaseResult:
+def load_case(case_dir, case: str, steady_window: float | None, edges: np.ndarray,
+              stage: str = "heaviside") -> CaseResult:
     """One case: steady values, binned transient (the mean of a train's transients) and CPU cost.
 
-    ``stage``: the case's reversal run, ``heaviside`` or ``train`` (``bulk_cells.reversal_stage``).
+    ``steady_window``: the last pre-shear strain of the steady values, or None for the last half
+    of its strain path (``dem_contract.steady_values``' default, the campaign's).
+    ``stage``: the case's reversal run: ``heaviside`` or ``train`` (``bulk_cells.reversal_stage``),
+    or any other reversal run with a sidecar (``sinusoidal``, a schedule: ``split_transients``).
     """
     case_dir = Path(case_dir)
     try:
@@ -93,7 +97,8 @@ def load_case(case_dir, case: str, steady_window: float, edges: np.ndarray, stag
         raise StudyInputError(f"{case}: missing or bad output: {e}") from None
     st = steady_values(pre, last_strain=steady_window)
     if st["n_samples"] < 2:
-        raise StudyInputError(f"{case}: fewer than 2 samples in the last {steady_window:g} of pre-shear strain")
+        window = "half" if steady_window is None else f"{steady_window:g}"
+        raise StudyInputError(f"{case}: fewer than 2 samples in the last {window} of pre-shear strain")
     steady = {"mu": st["mu"], "A_norm": st["A_norm"], "theta_A_deg": st["theta_A"], "phi": st["phi"], "Z": st["Z"]}
     pre_sign = float(np.sign(np.median(pre["gammadot"])))
     each = [transient_curves(tr.data, tr.strain0, edges, direction=tr.sign * pre_sign) for tr in transients]

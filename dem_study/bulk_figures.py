@@ -15,7 +15,7 @@ LABELS = {"mu": r"$\mu$", "A_norm": r"$|A|$", "theta_A_deg": r"$\theta_A$ (deg)"
 MARKERS = {"walls": "s", "periodic": "o"}
 
 
-def _break_at_wraps(x, y, *more):
+def break_at_wraps(x, y, *more):
     """Axial angles in [0, 180) with a gap (NaN) where they wrap through 0/180 (a step over 90 deg)."""
     x, y = np.asarray(x, float), np.asarray(y, float)
     cut = np.flatnonzero(np.abs(np.diff(y)) > 90) + 1
@@ -47,7 +47,7 @@ def bulk_vs_walls(cells, curves, references, tall, path, match_se: float = 2.0):
         for cell, c in curves.items():
             x, y, se = c["strain_since_reversal"].to_numpy(), c[q].to_numpy(), c[f"{q}_se"].to_numpy()
             if q in AXIAL:
-                x, y, se = _break_at_wraps(x, y, se)
+                x, y, se = break_at_wraps(x, y, se)
             ax.plot(x, y, color=colours[cell], lw=2.2 if cell in references else 1.0, label=cell)
             if cell in references:
                 ax.fill_between(x, y - se, y + se, color=colours[cell], alpha=0.2, lw=0)

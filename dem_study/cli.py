@@ -1,4 +1,4 @@
-"""Command line: ``python -m dem_study analyse|estimate|stiffness ...`` (see dem_study/README.md)."""
+"""Command line: ``python -m dem_study analyse|estimate|stiffness|engines ...`` (see dem_study/README.md)."""
 from __future__ import annotations
 
 import argparse
@@ -13,7 +13,7 @@ from campaign.schedule import makespan
 from dem_contract import DEMInputError
 from dem_contract.tables import read_table
 
-from . import analysis, figures, grid, stiffness
+from . import analysis, engines, engines_figures, figures, grid, stiffness
 
 
 def _tolerance(items):
@@ -140,6 +140,32 @@ def stiffness_study(args) -> int:
     return 0
 
 
+def engines_study(args) -> int:
+    """The engines side by side (``dem_study.engines``): the agreement table, the cost and the figure."""
+    with tempfile.TemporaryDirectory(prefix="engines-") as tmp:   # a release's cases are restored here
+        dirs = {engine: engines.case_dirs(folder, args.stage, pattern, Path(tmp) / engine)
+                for engine, folder, pattern in (("yade", args.yade, args.yade_cases),
+                                                ("lammps", args.lammps, args.lammps_cases))}
+        settings = {engine: engines.one_setting(engine, d) for engine, d in dirs.items()}
+        cases = engines.cases_table(dirs)
+        length = min(engines.transient_length(d, args.stage) for d in cases["dir"])
+        if args.early_strain > length + 1e-9:
+            raise analysis.StudyInputError(f"--early-strain {args.early_strain:g} is longer than the shortest "
+                                           f"{args.stage} transient ({length:g} strain)")
+        edges = analysis.strain_edges(length, args.transient_bin)
+        pairs, cells, curves = engines.compare(cases, args.stage, edges, args.early_strain, args.steady_window,
+                                               args.match_se)
+        table = engines.agreement_table(pairs, curves, args.early_strain, args.match_se)
+        cost = engines.cost_table(cases, cells, args.stage)
+    info = engines.summary(table, cost, args.stage, settings, args.early_strain, args.steady_window, args.match_se)
+    paths = engines.write(args.out, args.name, table, cost, info)
+    figure = Path(args.out) / f"{args.name}_transients.png"
+    engines_figures.transients(curves, dict(zip(cells["cell"], cells["seeds"])), args.stage, args.early_strain, figure)
+    print(paths["agreement_md"].read_text())
+    print("wrote " + ", ".join(str(p) for p in [*paths.values(), figure]))
+    return 0
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(prog="python -m dem_study", description=__doc__)
     sub = p.add_subparsers(dest="command", required=True)
@@ -171,6 +197,23 @@ def main(argv=None) -> int:
     s.add_argument("--steady-window", type=float, default=0.6, help="pre-shear strain averaged for steady values")
     s.add_argument("--early-strain", type=float, default=0.1, help="strain after the reversal of the early transient")
     s.set_defaults(func=stiffness_study)
+    g = sub.add_parser("engines", help="YADE against LAMMPS: steady state and early transients within seed noise")
+    g.add_argument("--yade", required=True, help="YADE's cases: a folder of case folders (<results_dir>/dem) or a "
+                                                 "data release (data/<name> or its cases/)")
+    g.add_argument("--lammps", required=True, help="LAMMPS's cases, as --yade")
+    g.add_argument("--stage", default="heaviside",
+                   help="the reversal stage compared (heaviside, sinusoidal, a schedule)")
+    g.add_argument("--out", required=True, help="output folder")
+    g.add_argument("--name", default="engines", help="file name prefix: <name>_agreement.csv/.md/.json, "
+                                                     "<name>_cost.csv, <name>_transients.png")
+    g.add_argument("--yade-cases", default="*", help="only the YADE case folders matching this glob")
+    g.add_argument("--lammps-cases", default="*", help="only the LAMMPS case folders matching this glob")
+    g.add_argument("--steady-window", type=float, default=None,
+                   help="last pre-shear strain of the steady values (default: the last half of the pre-shear)")
+    g.add_argument("--early-strain", type=float, default=0.1, help="strain after the reversal compared")
+    g.add_argument("--transient-bin", type=float, default=0.01, help="strain bin of the transient curves")
+    g.add_argument("--match-se", type=float, default=2.0, help="combined standard errors of an agreement")
+    g.set_defaults(func=engines_study)
     args = p.parse_args(argv)
     try:
         return args.func(args)
