@@ -37,10 +37,22 @@ def build_parser() -> argparse.ArgumentParser:
     rel.add_argument("--config", required=True, nargs="+",
                      help="the campaign's config file(s) as run, in the order of --configfile")
     rel.add_argument("--out", required=True, help="the release folder to write, e.g. data/<campaign>")
-    rel.add_argument("--states", action="store_true", help="also release each case's preshear.final.yade.gz")
+    rel.add_argument("--states", action="store_true",
+                     help="also release each case's pre-shear state (preshear.final.yade.gz; LAMMPS: .final.lammps)")
     rel.add_argument("--published", nargs="+", default=[], metavar="TABLE",
                      help="tables the campaign's run wrote from these cases (e.g. <results>/claims/paper_claims.csv), "
                           "kept in published/ to compare a recomputation with")
+    rel.add_argument("--compression", choices=sorted(release.COMPRESSIONS), default="gz",
+                     help="the series' compression: gz (.csv.gz, the default) or xz (.csv.xz, lzma preset 9e: "
+                          "about 15 %% fewer bytes); both lossless, equal data give equal bytes")
+    rel.add_argument("--run-commit", metavar="SHA",
+                     help="the commit whose code ran the DEM, when releasing from a later one (an ancestor of HEAD): "
+                          "dem_code_commit is then the last change of the DEM's code at or before it")
+    rel.add_argument("--carry-from", metavar="MANIFEST",
+                     help="remaking a release: a copy of its old manifest.yaml; the blocks this command does not "
+                          "write (seeds, republished, ...) and the published tables' provenance are carried over, "
+                          "and a 'remade' entry compares every kept file's sha256 with it")
+    rel.add_argument("--reason", help="with --carry-from: why the release is remade (kept in the manifest)")
     ver = sub.add_parser("verify", help="check releases' checksums and read every released case back")
     ver.add_argument("releases", nargs="+", help="release folders, e.g. data/*/")
     res = sub.add_parser("restore", help="one released case -> <out> as a finished DEM case")
@@ -64,18 +76,32 @@ def run(args) -> int:
         print(f"dem_contract import: {len(cases)} case(s) written and read back")
         print(summary(cases))
     elif args.command == "release":
-        command = "python -m dem_contract release " + shlex.join(sys.argv[2:] if sys.argv[1:2] == ["release"]
-                                                                 else ["--cases", *args.cases, "--config",
-                                                                       *args.config, "--out", args.out]
-                                                                 + (["--states"] if args.states else [])
-                                                                 + (["--published", *args.published]
-                                                                    if args.published else []))
+        command = "python -m dem_contract release " + shlex.join(
+            sys.argv[2:] if sys.argv[1:2] == ["release"] else
+            ["--cases", *args.cases, "--config", *args.config, "--out", args.out]
+            + (["--states"] if args.states else [])
+            + (["--published", *args.published] if args.published else [])
+            + (["--compression", args.compression] if args.compression != "gz" else [])
+            + (["--run-commit", args.run_commit] if args.run_commit else [])
+            + (["--carry-from", args.carry_from] if args.carry_from else [])
+            + (["--reason", args.reason] if args.reason else []))
         out = release.make_release(args.cases, args.out, args.config, command, args.states,
-                                   published=args.published)
+                                   published=args.published, compression=args.compression,
+                                   run_commit=args.run_commit, carry_from=args.carry_from, reason=args.reason)
         manifest = release.read_manifest(out)
         print(f"dem_contract release: {len(manifest['cases'])} case(s) in {out}, "
               f"{manifest['total_bytes'] / 1e6:.3f} MB; all releases beside it: "
               f"{release.release_bytes(Path(out).parent) / 1e6:.3f} MB (budget 20 MB in the repository)")
+        if args.carry_from:
+            files = manifest["remade"][-1]["files"]
+            print(f"dem_contract release: against {args.carry_from}: {files['kept_with_equal_sha256']} file(s) kept "
+                  f"with equal sha256, {len(files['changed'])} changed, {len(files['dropped'])} dropped, "
+                  f"{len(files['added'])} added; {files['bytes_before'] / 1e6:.3f} MB -> "
+                  f"{files['bytes_after'] / 1e6:.3f} MB")
+            for what in ("changed", "dropped", "added"):
+                for name in files[what]:
+                    print(f"  {what}: {name}")
+            return 1 if files["changed"] else 0
     elif args.command == "verify":
         bad = 0
         for folder in args.releases:

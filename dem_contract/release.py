@@ -2,24 +2,25 @@
 
 A release folder ``data/<name>/`` holds, per case ``cases/<label>/``:
 
-- ``<protocol>.csv.gz``: one minimal CSV per reversal run (the pre-shear's rows
-  followed by the run's, every contract column, gzip without a time stamp so the
-  bytes depend on the data only), the format ``python -m dem_contract import``
-  reads (docs/own-dem-data.md);
-- ``case.yaml``: the importer's metadata (pressure, I, cell, N, simulator, the
-  runs and the time and strain of each reversal, the stages' costs);
-- ``sidecars/<stage>.json``: the DEM stages' sidecars as YADE wrote them
-  (provenance: the scene, its sha256, YADE's version, CPU and wall time, steps,
+- ``<protocol>.csv.gz`` (or ``.csv.xz``, ``--compression xz``): one minimal CSV per
+  reversal run (the pre-shear's rows followed by the run's, every contract column,
+  gzip without a time stamp, or xz, which has none, so the bytes depend on the data
+  only), the format ``python -m dem_contract import`` reads (docs/own-dem-data.md);
+- ``case.yaml``: the importer's metadata (pressure, I, cell, N, simulator: the
+  engine and its version, ``YADE 2023.02a`` or ``LAMMPS 20210929``, the runs and
+  the time and strain of each reversal, the stages' costs);
+- ``sidecars/<stage>.json``: the DEM stages' sidecars as the engine wrote them
+  (provenance: the scene, its sha256, the engine's version, CPU and wall time, steps,
   N), restored verbatim, so the calibration, the comparison and the claims read
   the same costs and disks as from the original results; with
   ``preshear.census.json`` where the case has a contact census of its pre-shear's
   final state (``yade_scripts/contact_census.py``);
-- ``preshear.final.yade.gz`` (optional): the pre-shear's final state, for new
-  reversals branching from it;
+- ``preshear.final.yade.gz`` (a LAMMPS case: ``preshear.final.lammps``; optional,
+  ``--states``): the pre-shear's final state, for new reversals branching from it;
 
 and ``config.yaml`` (the campaign's config file as run; ``config-<k>.yaml``,
 k = 1, 2, ..., when it ran with several, in their order) and ``manifest.yaml``
-(the data license, CC-BY-4.0, data/LICENSE; the config, merged as Snakemake merges it, the commit of the code, YADE's version, the date, a sha256 and a size
+(the data license, CC-BY-4.0, data/LICENSE; the config, merged as Snakemake merges it, the commit of the code, the engine's version, the date, a sha256 and a size
 per file, the commands that regenerate the DEM and the release). Nothing in a
 release is edited by hand: ``verify`` reports a file whose checksum differs, and
 ``restore_case`` and ``released_cases`` (what the workflow's release rules use)
@@ -31,6 +32,7 @@ import datetime
 import gzip
 import hashlib
 import json
+import lzma
 import shutil
 import subprocess
 import tempfile
@@ -48,13 +50,18 @@ MANIFEST = "manifest.yaml"
 CASES_DIR = "cases"
 PUBLISHED_DIR = "published"      # the campaign's own tables, for comparison with a recomputation
 STATE = "preshear.final.yade.gz"
+#: The pre-shear's final state by engine (a YADE save; a LAMMPS restart file, lammps_scripts/shearing.py).
+STATES = {"yade": STATE, "lammps": "preshear.final.lammps"}
+#: The engines whose sidecars a release reads: the sidecar key of the engine's version, and its name in case.yaml.
+ENGINES = {"yade": ("yade_version", "YADE"), "lammps": ("lammps_version", "LAMMPS")}
 #: Stages whose sidecars every case has before its reversal runs.
 BASE_STAGES = ("pack", "preshear")
 #: A contact census of the pre-shear's final state (yade_scripts/contact_census.py), released with the
 #: sidecars where a case has one: the fabric readings and rattlers, which need the state to measure.
 CENSUS = "preshear.census"
 #: The code a DEM result depends on (its last commit is named in the manifest).
-DEM_CODE = ("yade_scripts", "campaign/scenes.py", "campaign/scene_spec.py")
+#: lammps_scripts/ runs the same scene under LAMMPS (and imports yade_scripts/' pure modules).
+DEM_CODE = ("yade_scripts", "lammps_scripts", "campaign/scenes.py", "campaign/scene_spec.py")
 #: Results sub-folders a released case can come from (the campaign's, the bulk study's).
 SOURCES = ("dem", "accuracy/bulk")
 
@@ -73,6 +80,31 @@ def write_csv_gz(frame: pd.DataFrame, path) -> None:
     text = frame.to_csv(index=False).encode()
     with open(path, "wb") as raw, gzip.GzipFile(fileobj=raw, mode="wb", mtime=0, filename="") as f:
         f.write(text)
+
+
+#: xz's fixed preset, the strongest: 12-15 % fewer bytes than gzip -9 on the releases' series (data/bulk-decide's:
+#: 12.7 %). Its 64 MiB dictionary exceeds any series (a 4 MiB one gives the same bytes).
+XZ_PRESET = 9 | lzma.PRESET_EXTREME
+
+
+def write_csv_xz(frame: pd.DataFrame, path) -> None:
+    """A table as xz-compressed CSV (fixed preset ``XZ_PRESET``; the xz container holds no time stamp or file
+    name, so equal data give equal bytes with the same liblzma)."""
+    Path(path).write_bytes(lzma.compress(frame.to_csv(index=False).encode(), format=lzma.FORMAT_XZ,
+                                         check=lzma.CHECK_CRC64, preset=XZ_PRESET))
+
+
+#: A release's compression of its series: the file suffix and the writer (gz, the default, or xz).
+COMPRESSIONS = {"gz": (".csv.gz", write_csv_gz), "xz": (".csv.xz", write_csv_xz)}
+
+
+def case_engine(sidecar: dict, where) -> str:
+    """The engine that wrote a sidecar: its ``engine`` key, else ``lammps`` when it names ``lammps_version``,
+    else ``yade`` (YADE's sidecars before the key)."""
+    engine = sidecar.get("engine") or ("lammps" if "lammps_version" in sidecar else "yade")
+    if engine not in ENGINES:
+        raise DEMInputError(f"{where}: engine {engine!r}, a release knows {sorted(ENGINES)}")
+    return engine
 
 
 def case_protocols(case_dir) -> list:
@@ -126,13 +158,22 @@ def reverses_at_once(sidecar: dict, pre) -> bool:
     return t is not None and abs(float(t) - float(pre["t"].iloc[-1])) <= 1e-9 * max(1.0, abs(float(t)))
 
 
-def _release_case(case_dir: Path, out: Path, with_state: bool) -> dict:
-    """One finished case into ``out``: its minimal CSVs, case YAML, sidecars (and state). Returns its summary."""
+def _release_case(case_dir: Path, out: Path, with_state: bool, compression: str = "gz") -> dict:
+    """One finished case into ``out``: its minimal CSVs, case YAML, sidecars (and state). Returns its summary.
+
+    A YADE case's ``case.yaml`` and summary are as they always were (``simulator: YADE <version>``,
+    ``yade_version``); a LAMMPS case's name LAMMPS and its version (``simulator: LAMMPS 20210929``;
+    ``engine: lammps``, ``lammps_version``).
+    """
     label = case_dir.name
+    suffix, write_series = COMPRESSIONS[compression]
     scene = read_sidecar(case_dir / "scene.json")
     pre_side = read_sidecar(case_dir / "preshear.json")
     if not scene or not pre_side:
         raise DEMInputError(f"{case_dir}: not a finished DEM case (scene.json and preshear.json expected)")
+    engine = case_engine(pre_side, case_dir / "preshear.json")
+    version_key, simulator = ENGINES[engine]
+    version = pre_side.get(version_key, "unknown")
     protocols = case_protocols(case_dir)
     if not protocols:
         raise DEMInputError(f"{case_dir}: no finished reversal run (<protocol>.csv with its .json)")
@@ -161,8 +202,8 @@ def _release_case(case_dir: Path, out: Path, with_state: bool) -> dict:
                 entry["transition"] = "heaviside"
             reversals.append(entry)
         lead = pre if not runs else pre.iloc[-pre_tail_rows(len(pre), len(run)):]
-        write_csv_gz(pd.concat([lead, run], ignore_index=True)[list(CONTRACT_COLUMNS)], out / f"{protocol}.csv.gz")
-        runs.append({"file": f"{protocol}.csv.gz", "protocol": protocol, "reversals": reversals})
+        write_series(pd.concat([lead, run], ignore_index=True)[list(CONTRACT_COLUMNS)], out / f"{protocol}{suffix}")
+        runs.append({"file": f"{protocol}{suffix}", "protocol": protocol, "reversals": reversals})
     stages = [*BASE_STAGES, *protocols]
     costs = {}
     for stage in ["scene", *stages, CENSUS]:
@@ -178,7 +219,7 @@ def _release_case(case_dir: Path, out: Path, with_state: bool) -> dict:
     meta = {"pressure": float(material.get("pressure", pre_side.get("pressure_Pa", 0.0))),
             "inertial_number": float((scene.get("loading") or {}).get("inertial_number",
                                                                        pre_side.get("inertial_number", 0.0))),
-            "simulator": f"YADE {pre_side.get('yade_version', 'unknown')}",
+            "simulator": f"{simulator} {version}",
             "cell": {k: float(geometry[k]) for k in ("H_over_d", "W_over_H") if k in geometry},
             "notes": f"data release of case {label}; the DEM sidecars as written are in sidecars/",
             "cases": [{"seed": int(scene.get("seed", pre_side.get("seed", 0))), "runs": runs, "costs": costs}]}
@@ -188,19 +229,105 @@ def _release_case(case_dir: Path, out: Path, with_state: bool) -> dict:
         del meta["cell"]
     (out / "case.yaml").write_text(yaml.safe_dump(meta, sort_keys=False))
     if with_state:
-        if not (case_dir / STATE).is_file():
-            raise DEMInputError(f"{case_dir / STATE}: file not found (asked for with --states)")
-        shutil.copyfile(case_dir / STATE, out / STATE)
+        state = STATES[engine]
+        if not (case_dir / state).is_file():
+            raise DEMInputError(f"{case_dir / state}: file not found (asked for with --states)")
+        shutil.copyfile(case_dir / state, out / state)
     return {"protocols": protocols, "seed": meta["cases"][0]["seed"], "N": meta.get("N"),
-            "yade_version": pre_side.get("yade_version", "unknown"),
+            **({} if engine == "yade" else {"engine": engine}), version_key: version,
             "cpu_time_s": sum(c.get("cpu_time_s", 0.0) for c in costs.values())}
 
 
 DATA_LICENSE = "CC-BY-4.0"     # the data releases' license (data/LICENSE; the code's is GPL-3.0-or-later, LICENSE)
 
 
+def resolve_run_commit(run_commit: str, repo) -> str:
+    """The full hash of ``run_commit``, once it is a commit and an ancestor of ``repo``'s HEAD (or HEAD itself).
+
+    Raises
+    ------
+    DEMInputError
+        ``run_commit`` is not a commit of the repository, or not in HEAD's history.
+    """
+    full = git_output("rev-parse", "--verify", "--quiet", f"{run_commit}^{{commit}}", cwd=repo)
+    if not full or full == "unknown":
+        raise DEMInputError(f"--run-commit {run_commit}: not a commit of the repository {repo}")
+    try:
+        ancestor = subprocess.run(["git", "merge-base", "--is-ancestor", full, "HEAD"], cwd=repo,
+                                  capture_output=True).returncode == 0
+    except OSError:
+        ancestor = False
+    if not ancestor:
+        raise DEMInputError(f"--run-commit {run_commit}: not an ancestor of HEAD "
+                            f"({git_output('rev-parse', 'HEAD', cwd=repo)}); a release is made from a commit that "
+                            "holds the code that ran its DEM in its history")
+    return full
+
+
+def manifest_blocks(text: str) -> dict:
+    """A manifest's top-level blocks as written: key -> its lines (the key's line and every line up to the next
+    top-level key), comments kept, so a block can be carried into a remade manifest unchanged."""
+    blocks, key = {}, None
+    for line in text.splitlines(keepends=True):
+        head = line.split(":", 1)[0]
+        if line[:1] not in (" ", "#", "-", "\n", "") and ":" in line and head.isidentifier():
+            key = head
+            blocks[key] = ""
+        if key is not None:
+            blocks[key] += line
+    return blocks
+
+
+def carry_over(new: dict, old_text: str, carried) -> str:
+    """The manifest ``new`` as YAML with the blocks ``carried`` of the old manifest's text spliced in verbatim.
+
+    Each carried block goes after the block that precedes it in the old manifest (the first of ``new``'s
+    blocks before it there), so it keeps its place and its comments.
+    """
+    old = yaml.safe_load(old_text)
+    old_keys = list(old)
+    after, head = {}, []
+    for i, key in enumerate(old_keys):
+        if key in carried:
+            prev = next((k for k in reversed(old_keys[:i]) if k in new), None)
+            (after.setdefault(prev, []) if prev else head).append(key)
+    old_blocks = manifest_blocks(old_text)
+    new_blocks = manifest_blocks(yaml.safe_dump(new, sort_keys=False))
+    text = "".join(old_blocks[k] for k in head)
+    for key in new_blocks:
+        text += new_blocks[key] + "".join(old_blocks[k] for k in after.get(key, []))
+    merged = yaml.safe_load(text)
+    if list(merged) != [*head, *(k for key in new for k in (key, *after.get(key, [])))] or \
+            any(merged[k] != old[k] for k in carried) or any(merged[k] != v for k, v in new.items()):
+        raise DEMInputError("carry-over: the merged manifest does not read back as the new one plus the old "
+                            f"blocks {sorted(carried)}")
+    return text
+
+
+def remade_record(new_files: dict, old: dict, old_commit: str, reason: str, restore_commands, command: str) -> dict:
+    """The ``remade`` entry of a release remade from an older one: when, from which, why, its files compared."""
+    old_files = old.get("files") or {}
+    kept = [n for n in new_files if n in old_files]
+    changed = [n for n in kept if (new_files[n]["sha256"], new_files[n]["bytes"])
+               != (old_files[n]["sha256"], old_files[n]["bytes"])]
+    return {
+        "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
+        "from": {k: v for k, v in (("release", old.get("release")), ("date", old.get("date")),
+                                   ("code_commit", old.get("code_commit")), ("manifest_commit", old_commit),
+                                   ("command", (old.get("regenerate") or {}).get("release")))
+                 if v not in (None, "", "unknown")},
+        "reason": reason,
+        "files": {"kept_with_equal_sha256": len(kept) - len(changed), "changed": changed,
+                  "dropped": [n for n in old_files if n not in new_files],
+                  "added": [n for n in new_files if n not in old_files],
+                  "bytes_before": old.get("total_bytes"), "bytes_after": sum(f["bytes"] for f in new_files.values())},
+        "commands": [*restore_commands, command],
+    }
+
+
 def make_release(case_dirs, out, config, command: str, with_states: bool = False, repo=None,
-                 published=()) -> Path:
+                 published=(), compression: str = "gz", run_commit: str | None = None, carry_from=None,
+                 reason: str | None = None) -> Path:
     """Write a data release of finished DEM cases into ``out`` (a new or empty folder).
 
     Parameters
@@ -215,13 +342,31 @@ def make_release(case_dirs, out, config, command: str, with_states: bool = False
     command : str
         The command line that made the release (named in the manifest).
     with_states : bool
-        Also release each case's pre-shear final state (``preshear.final.yade.gz``).
+        Also release each case's pre-shear final state (``preshear.final.yade.gz``; a LAMMPS case's
+        ``preshear.final.lammps``).
     repo : str or Path, optional
         The repository whose commit is recorded (default: this package's).
     published : sequence of str or Path
         Tables the campaign's own run wrote from these cases (for instance its
         ``claims/paper_claims.csv``), copied to ``published/<file name>`` and checksummed
         like the data, so that a recomputation from the release can be compared with them.
+    compression : {"gz", "xz"}
+        The series' compression: gzip (``.csv.gz``, the default, as every release before xz) or xz
+        (``.csv.xz``, ``XZ_PRESET``: 14-15 % fewer bytes). Both lossless; the manifest names xz
+        (``compression: xz``), a gzip release's manifest keys are as they always were.
+    run_commit : str, optional
+        The commit whose code ran the DEM, when the release is made from a later one (a campaign run
+        from a pinned worktree): an ancestor of HEAD; ``dem_code_commit`` is then the last commit at or
+        before it that changed ``DEM_CODE``, and the manifest records it as ``run_commit``.
+    carry_from : str or Path, optional
+        The manifest of the release this one remakes (a copy: the folder is deleted to remake it):
+        every top-level block the command does not write (``seeds``, ``republished``, ...) is carried
+        over verbatim, comments included, the ``published`` provenance (where each table came from in
+        the campaign) replaces the paths given here, and a ``remade`` entry records the date, the
+        release it was restored from, ``reason``, every kept file's sha256 against the old manifest
+        and the commands (the cases are taken to be restored from that release, at ``out``).
+    reason : str, optional
+        Why the release is remade (required with ``carry_from``).
 
     Returns
     -------
@@ -231,8 +376,24 @@ def make_release(case_dirs, out, config, command: str, with_states: bool = False
     out = Path(out)
     configs = [Path(config)] if isinstance(config, (str, Path)) else [Path(c) for c in config]
     repo = Path(repo) if repo else Path(__file__).resolve().parents[1]
+    if compression not in COMPRESSIONS:
+        raise DEMInputError(f"compression {compression!r}: expected one of {sorted(COMPRESSIONS)}")
     if out.exists() and any(out.iterdir()):
         raise DEMInputError(f"{out}: exists and is not empty; a release is written once (delete it to remake it)")
+    run_commit = resolve_run_commit(run_commit, repo) if run_commit else None
+    old_text = old = None
+    if carry_from is not None:
+        if not reason:
+            raise DEMInputError("--carry-from: give --reason (why the release is remade)")
+        carry_from = Path(carry_from)
+        carry_from = carry_from / MANIFEST if carry_from.is_dir() else carry_from
+        try:
+            old_text = carry_from.read_text()
+        except OSError as exc:
+            raise DEMInputError(f"{carry_from}: not readable ({exc.strerror or exc})") from None
+        old = yaml.safe_load(old_text)
+        if not isinstance(old, dict) or "files" not in old:
+            raise DEMInputError(f"{carry_from}: not a release manifest (no 'files')")
     cfg = {}
     for path in configs:
         cfg = merge_config(cfg, yaml.safe_load(path.read_text()) or {})
@@ -260,16 +421,24 @@ def make_release(case_dirs, out, config, command: str, with_states: bool = False
             shutil.copyfile(path, out / PUBLISHED_DIR / path.name)
             tables[path.name] = str(path)
         cases = {case_dir.name: {"source": source,
-                                 **_release_case(case_dir, out / CASES_DIR / case_dir.name, with_states)}
+                                 **_release_case(case_dir, out / CASES_DIR / case_dir.name, with_states, compression)}
                  for case_dir, source in sources.items()}
     except BaseException:       # no half-made release is left behind
         shutil.rmtree(out)
         raise
     files = {str(p.relative_to(out)): {"sha256": sha256(p), "bytes": p.stat().st_size}
              for p in sorted(out.rglob("*")) if p.is_file() and p.name != MANIFEST}
-    yade = sorted({c["yade_version"] for c in cases.values()})
+    engines = sorted({c.get("engine", "yade") for c in cases.values()})
+    versions = {}
+    for engine in engines:
+        key = ENGINES[engine][0]
+        found = sorted({c[key] for c in cases.values() if key in c}, key=str)
+        versions[key] = found[0] if len(found) == 1 else found
     targets = " ".join(f"<results_dir>/{c['source']}/{label}/{p}.csv"
                        for label, c in cases.items() for p in c["protocols"])
+    if old is not None and old.get("published"):
+        # where each table came from in the campaign's own run, not the restored copy it was taken from now
+        tables = {name: old["published"].get(name, path) for name, path in tables.items()}
     manifest = {
         "release": out.name,
         "license": DATA_LICENSE,
@@ -278,9 +447,15 @@ def make_release(case_dirs, out, config, command: str, with_states: bool = False
         # tracked files differing from the commit, but for this release's own folder (remade: deleted first)
         "code_dirty": bool(git_output("status", "--porcelain", "--untracked-files=no", "--", ".",
                                 *excluded_from_status(out, repo), cwd=repo)),
-        # the last commit that changed the DEM's code (the YADE scene and stages, the config -> scene mapping)
-        "dem_code_commit": git_output("log", "-1", "--format=%H", "--", *DEM_CODE, cwd=repo),
-        "yade_version": yade[0] if len(yade) == 1 else yade,
+        **({"run_commit": run_commit} if run_commit else {}),
+        # the last commit that changed the DEM's code (the YADE and LAMMPS stages, the config -> scene mapping),
+        # at or before the commit that ran the DEM
+        "dem_code_commit": git_output("log", "-1", "--format=%H", *([run_commit] if run_commit else []),
+                                      "--", *DEM_CODE, cwd=repo),
+        # a YADE release: yade_version alone, as always; else the engine(s) and each one's version
+        **({} if engines == ["yade"] else {"engine": engines[0] if len(engines) == 1 else engines}),
+        **versions,
+        **({} if compression == "gz" else {"compression": compression}),
         "states": with_states,
         "regenerate": {
             "dem": f"snakemake -j2 --configfile {' '.join(f'{out}/{n}' for n in names)}"
@@ -293,7 +468,17 @@ def make_release(case_dirs, out, config, command: str, with_states: bool = False
         "files": files,
         "total_bytes": sum(f["bytes"] for f in files.values()),
     }
-    (out / MANIFEST).write_text(yaml.safe_dump(manifest, sort_keys=False))
+    if old is None:
+        (out / MANIFEST).write_text(yaml.safe_dump(manifest, sort_keys=False))
+        return out
+    restores = [f"python -m dem_contract restore --release {out} --case {d.name} --out {d}" for d in sources]
+    old_commit = git_output("log", "-1", "--format=%H", "--", str(out.resolve() / MANIFEST), cwd=repo)
+    entry = remade_record(files, old, old_commit, reason, restores, command)
+    at = list(manifest).index("regenerate")        # the remake's record before the commands, after the states
+    items = list(manifest.items())
+    manifest = dict([*items[:at], ("remade", [*(old.get("remade") or []), entry]), *items[at:]])
+    carried = [k for k in old if k not in manifest]
+    (out / MANIFEST).write_text(carry_over(manifest, old_text, carried))
     return out
 
 
@@ -384,8 +569,9 @@ def _restore_checked_case(release, label, out) -> Path:
         out.mkdir(parents=True, exist_ok=True)
         for path in imported.iterdir():
             shutil.move(str(path), out / path.name)
-    if (src / STATE).is_file():
-        shutil.copyfile(src / STATE, out / STATE)
+    for state in STATES.values():
+        if (src / state).is_file():
+            shutil.copyfile(src / state, out / state)
     return out
 
 
@@ -429,6 +615,7 @@ def case_files(release, label) -> list:
     return sorted(str(p) for p in (Path(release) / CASES_DIR / label).rglob("*") if p.is_file())
 
 
-__all__ = ["DEMInputError", "MANIFEST", "DATA_LICENSE", "sha256", "git_output", "write_csv_gz", "case_protocols", "make_release",
+__all__ = ["DEMInputError", "MANIFEST", "DATA_LICENSE", "sha256", "git_output", "write_csv_gz", "write_csv_xz",
+           "COMPRESSIONS", "case_engine", "resolve_run_commit", "case_protocols", "make_release",
            "read_manifest", "checksum_problems", "require_intact", "restore_case", "verify", "released_cases",
            "release_bytes", "case_files"]

@@ -5,6 +5,7 @@ import csv
 import gzip
 import io
 import json
+import lzma
 from pathlib import Path
 
 import numpy as np
@@ -120,11 +121,13 @@ def read_series(path, columns=CONTRACT_COLUMNS, min_samples: int = 2, what: str 
 
 
 def _read_complete_text(path: Path) -> str:
-    """A series file's text, gzipped or not, after ``check_complete_rows`` (an empty file is left to pandas
-    to report); ``read_series`` parses this text, so the file is read and decompressed once."""
+    """A series file's text, gzip- (``.gz``) or xz-compressed (``.xz``) or not, after ``check_complete_rows``
+    (an empty file is left to pandas to report); ``read_series`` parses this text, so the file is read and
+    decompressed once."""
+    opener = {".gz": gzip.open, ".xz": lzma.open}.get(path.suffix)
     try:
-        text = gzip.open(path, "rt").read() if path.suffix == ".gz" else path.read_text()
-    except (OSError, UnicodeDecodeError, EOFError) as exc:
+        text = opener(path, "rt").read() if opener else path.read_text()
+    except (OSError, UnicodeDecodeError, EOFError, lzma.LZMAError) as exc:
         raise DEMInputError(f"{path}: not a readable CSV ({exc})") from None
     if text.strip():
         check_complete_rows(path, text)
