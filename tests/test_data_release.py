@@ -349,16 +349,25 @@ DECIDE = ROOT / "data" / "bulk-decide"
 RUN_RELEASE_CLAIMS = os.environ.get("RUN_RELEASE_CLAIMS") == "1"
 
 
-@pytest.mark.skipif(not DECIDE.is_dir(), reason="the deciding campaign's release is not in data/")
-def test_the_deciding_preset_takes_every_case_from_its_release(workflow_dir, tmp_path):
-    """config/bulk_decide.yaml names data/bulk-decide: its dry run restores every case and plans no DEM job."""
+#: Presets that recompute a released campaign: (release, the preset's config files in --configfile order).
+RELEASED_PRESETS = [
+    (DECIDE, ("config/bulk_decide.yaml",)),
+    (ROOT / "data" / "bulk-verdict", ("config/bulk_verdict.yaml",)),
+    (ROOT / "data" / "bulk-verdict-lammps", ("config/bulk_verdict.yaml", "config/bulk_verdict_lammps.yaml")),
+]
+
+
+@pytest.mark.parametrize("release, configs", RELEASED_PRESETS, ids=[r.name for r, _ in RELEASED_PRESETS])
+def test_a_released_campaigns_preset_takes_every_case_from_its_release(workflow_dir, tmp_path, release, configs):
+    """Each preset names its release: its dry run restores every case and plans no DEM job (neither engine)."""
     from tests.helpers import counts, dry_run
-    plan = dry_run("--configfile", "config/bulk_decide.yaml", "--config", f"results_dir={tmp_path / 'results'}",
+    assert release.is_dir(), f"{release} is not in data/"
+    plan = dry_run("--configfile", *configs, "--config", f"results_dir={tmp_path / 'results'}",
                    "allow_outside_tree=True",
                    cwd=workflow_dir)
     assert plan.returncode == 0, plan.stderr[-3000:]
     c = counts(plan.stdout)
-    seeds = yaml.safe_load((ROOT / "config" / "bulk_decide.yaml").read_text())["seeds"]
+    seeds = yaml.safe_load((ROOT / configs[0]).read_text())["seeds"]
     assert c.get("release_case") == len(seeds) and not any(c.get(r) for r in DEM_RULES), c
 
 
@@ -379,6 +388,24 @@ def test_the_deciding_campaign_recomputed_from_its_release_gives_its_published_t
     assert run.returncode == 0, run.stderr[-3000:]
     assert not any(f"rule {r}:" in run.stderr + run.stdout for r in DEM_RULES)
     assert published.compare(DECIDE, results) == []
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(not RUN_RELEASE_CLAIMS, reason="opt-in: RUN_RELEASE_CLAIMS=1 (calibrates a verdict campaign from "
+                                                 "its release, about 10 minutes on 2 cores each)")
+@pytest.mark.parametrize("release, configs", RELEASED_PRESETS[1:], ids=[r.name for r, _ in RELEASED_PRESETS[1:]])
+def test_a_verdict_campaign_recomputed_from_its_release_gives_its_published_tables(workflow_dir, tmp_path, release,
+                                                                                  configs):
+    """The verdict campaigns (YADE and LAMMPS) from data/ alone, no DEM engine: every published table again."""
+    from tests.helpers import snakemake as snakemake_in
+    results = tmp_path / "results"
+    targets = list(published.published_tables(release, results).values())
+    assert {p.name for p in targets} >= {"paper_claims.csv", "params_table.csv"}
+    run = snakemake_in("-j2", *targets, "--configfile", *configs, "--config", f"results_dir={results}",
+                       "allow_outside_tree=True", cwd=workflow_dir, timeout=None)
+    assert run.returncode == 0, run.stderr[-3000:]
+    assert not any(f"rule {r}:" in run.stderr + run.stdout for r in DEM_RULES)
+    assert published.compare(release, results) == []
 
 
 def test_a_release_remade_in_place_is_not_called_dirty_for_its_own_deleted_folder(tmp_path):
