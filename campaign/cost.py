@@ -31,6 +31,8 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from dem_contract import sidecar_engine
+
 from .scene_spec import protocol_strain, scene_default, scene_module
 
 #: The DEM engines a scene may name (yade_scripts/scene.py ``ENGINES``), as a price names them.
@@ -157,8 +159,8 @@ def measured_throughput(results_dir, folder: str = "dem", exclude=(), engine: st
     documented one.
 
     ``exclude``: case folders not to read (cases restored from a data release: their CPU time was
-    measured where the release was made). Only the sidecars of ``engine``'s stages count (their
-    ``engine`` key; a sidecar without one was written by YADE, before engines existed).
+    measured where the release was made). Only the sidecars of ``engine``'s stages count
+    (``dem_contract.sidecar_engine``: their ``engine`` key; one without it was written by YADE).
 
     factor = sum_i (N_i steps_i / documented_throughput(N_i, engine)) / sum_i cpu_time_s_i
 
@@ -169,7 +171,7 @@ def measured_throughput(results_dir, folder: str = "dem", exclude=(), engine: st
     """
     where = Path(results_dir) / folder
     read = read_cost_sidecars(p for p in where.glob("*/*.json") if p.parent.name not in set(exclude))
-    found = [(p, s) for p, s in read if s.get("engine", "yade") == engine]
+    found = [(p, s) for p, s in read if sidecar_engine(s) == engine]
     shear = [(p, s) for p, s in found if s.get("stage", p.stem) != "pack"]
     found, packs = (shear, "") if shear else (found, " (packs only)")
     if not found:

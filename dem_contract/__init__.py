@@ -27,9 +27,9 @@ from .derived import (MIN_PRE_REVERSAL_SAMPLES, PRE_REVERSAL_WINDOW, STEADY_FRAC
                       Transient, fabric_angle_deg, fabric_norm, pre_reversal_state, reversal_indices,
                       reversal_times, split_transients, steady_values, steady_window)
 from .labels import LABEL_RE, case_label, parse_case_label, split_case_label
-from .series import CONTRACT_COLUMNS, REVERSAL_PROTOCOLS, DEMInputError, read_series, read_sidecar
+from .series import CONTRACT_COLUMNS, REVERSAL_PROTOCOLS, DEMInputError, read_series, read_sidecar, sidecar_engine
 
-__all__ = ["CONTRACT_COLUMNS", "REVERSAL_PROTOCOLS", "DEMInputError", "read_series", "read_sidecar",
+__all__ = ["CONTRACT_COLUMNS", "REVERSAL_PROTOCOLS", "DEMInputError", "read_series", "read_sidecar", "sidecar_engine",
            "LABEL_RE", "case_label", "parse_case_label", "split_case_label",
            "STEADY_FRACTION", "PRE_REVERSAL_WINDOW", "MIN_PRE_REVERSAL_SAMPLES", "steady_window", "steady_values",
            "fabric_norm", "fabric_angle_deg", "axial_mean", "angle_difference", "reversal_indices",

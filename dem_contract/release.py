@@ -43,7 +43,7 @@ import yaml
 
 from .derived import reversal_kinds, split_transients
 from .importer import import_cases
-from .series import CONTRACT_COLUMNS, DEMInputError, read_series, read_sidecar
+from .series import CONTRACT_COLUMNS, DEMInputError, read_series, read_sidecar, sidecar_engine
 
 #: The manifest's file name, and the release's layout.
 MANIFEST = "manifest.yaml"
@@ -99,9 +99,8 @@ COMPRESSIONS = {"gz": (".csv.gz", write_csv_gz), "xz": (".csv.xz", write_csv_xz)
 
 
 def case_engine(sidecar: dict, where) -> str:
-    """The engine that wrote a sidecar: its ``engine`` key, else ``lammps`` when it names ``lammps_version``,
-    else ``yade`` (YADE's sidecars before the key)."""
-    engine = sidecar.get("engine") or ("lammps" if "lammps_version" in sidecar else "yade")
+    """The engine that wrote a case's sidecar (``sidecar_engine``), one a release knows (``ENGINES``)."""
+    engine = sidecar_engine(sidecar)
     if engine not in ENGINES:
         raise DEMInputError(f"{where}: engine {engine!r}, a release knows {sorted(ENGINES)}")
     return engine

@@ -388,3 +388,9 @@ def read_sidecar(path) -> dict:
         raise DEMInputError(f"{side}: expected a JSON object")
     return meta
 
+
+def sidecar_engine(sidecar: dict) -> str:
+    """The DEM engine that wrote a stage's sidecar: its ``engine`` key, else ``lammps`` when it names
+    ``lammps_version``, else ``yade`` (YADE's sidecars from before the key existed)."""
+    return sidecar.get("engine") or ("lammps" if "lammps_version" in sidecar else "yade")
+

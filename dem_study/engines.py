@@ -58,7 +58,7 @@ import numpy as np
 import pandas as pd
 from scipy.stats import norm
 
-from dem_contract import DEMInputError, angle_difference, read_sidecar, stage_costs
+from dem_contract import DEMInputError, angle_difference, read_sidecar, sidecar_engine, stage_costs
 from dem_contract.release import CASES_DIR, MANIFEST, read_manifest, require_intact, restore_case
 
 from . import bulk
@@ -182,14 +182,14 @@ def cases_table(engines: dict) -> pd.DataFrame:
 
 def throughput(case_dir, stage: str) -> dict:
     """N, shear steps and CPU seconds of a case's pre-shear and reversal (``stage_costs``), and the
-    engine its sidecar records (``engine``; sidecars before the LAMMPS engine: yade)."""
+    engine that wrote its sidecar (``dem_contract.sidecar_engine``)."""
     try:
         c = stage_costs(case_dir, ("preshear", stage), keys=("steps", "cpu_time_s"), missing="raise")
     except DEMInputError as exc:
         raise StudyInputError(str(exc)) from None
     side = read_sidecar(Path(case_dir) / "preshear.csv")
     return {"N": c["N"], "steps": c["steps"], "cpu_time_s": c["cpu_time_s"],
-            "engine_recorded": str(side.get("engine", "yade"))}
+            "engine_recorded": sidecar_engine(side)}
 
 
 def cost_table(cases: pd.DataFrame, cells: pd.DataFrame, stage: str) -> pd.DataFrame:
