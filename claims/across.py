@@ -6,17 +6,21 @@ each table's estimate, 90 % interval and verdict, and
 
 - ``same_verdict``: whether the two verdicts are the same; a row where they differ is reported
   as **engine-dependent** (``dependent_word``: cell-dependent for two cells);
-- the difference of the two estimates and its z,
+- the difference of the two estimates and its Welch t,
 
-  .. math:: z = \frac{\hat\theta_1 - \hat\theta_2}{\sqrt{s_1^2/n_1 + s_2^2/n_2}}
+  .. math:: t = \frac{\hat\theta_1 - \hat\theta_2}{\sqrt{s_1^2/n_1 + s_2^2/n_2}}, \qquad
+            \nu = \frac{(s_1^2/n_1 + s_2^2/n_2)^2}{\frac{(s_1^2/n_1)^2}{n_1 - 1} + \frac{(s_2^2/n_2)^2}{n_2 - 1}}
 
-  (``sd`` and ``n`` of each row: its seed-to-seed s.d. and seeds, claims.table), with a two-sided
-  p-value from the normal distribution, and ``estimates_differ`` at family-wise 5 % over the rows
-  (two-sided, ``FAMILY_ALPHA`` = 10 %: the table's one level, 5 % a side; Holm, ``stats.holm``): a verdict can differ between the campaigns while their estimates agree
+  (``sd`` and ``n`` of each row: its seed-to-seed s.d., ``ddof = 1``, and seeds, claims.table), with
+  a two-sided p-value from Student's t with the Welch-Satterthwaite degrees of freedom nu
+  (``scipy.stats.ttest_ind_from_stats(..., equal_var=False)``: the seed counts are small, 5-10 a
+  side, where the normal distribution would overstate a difference), and ``estimates_differ`` at
+  family-wise 10 % over the rows (two-sided, ``FAMILY_ALPHA``: the table's one level, 5 % a side;
+  Holm, ``stats.holm``): a verdict can differ between the campaigns while their estimates agree
   within seed noise (the two intervals straddle a null or a margin), which is a different finding
   from estimates that differ.
 
-Rows without a finite ``sd`` or ``n`` < 2 in either table get no z and are left out of the Holm
+Rows without a finite ``sd`` or ``n`` < 2 in either table get no t and are left out of the Holm
 family. Data never executes: labels are checked to be plain words.
 """
 from __future__ import annotations
@@ -50,7 +54,7 @@ def read_table(path) -> pd.DataFrame:
 
 
 def across(first: pd.DataFrame, second: pd.DataFrame, labels=("yade", "lammps")) -> pd.DataFrame:
-    """One row per shared claim id: both tables' estimate, interval and verdict, the z of their difference.
+    """One row per shared claim id: both tables' estimate, interval and verdict, the Welch t of their difference.
 
     Parameters
     ----------
@@ -63,8 +67,8 @@ def across(first: pd.DataFrame, second: pd.DataFrame, labels=("yade", "lammps"))
     -------
     DataFrame
         ``claim_id``, ``<label>_estimate``, ``_low``, ``_high``, ``_n``, ``_verdict`` for each label,
-        ``same_verdict``, ``difference`` (first - second), ``z``, ``p`` (two-sided), ``estimates_differ``
-        (Holm at family-wise ``FAMILY_ALPHA`` over the rows with a z), in the first table's row order.
+        ``same_verdict``, ``difference`` (first - second), Welch's ``t``, its degrees of freedom ``df``,
+        ``p`` (two-sided), ``estimates_differ`` (Holm at family-wise ``FAMILY_ALPHA`` over the rows with a t), in the first table's row order.
     """
     a, b = labels
     keep = ["claim_id", "estimate", "low", "high", "sd", "n", "verdict"]
@@ -73,8 +77,14 @@ def across(first: pd.DataFrame, second: pd.DataFrame, labels=("yade", "lammps"))
     ok = (merged[f"n_{a}"] >= 2) & (merged[f"n_{b}"] >= 2) & np.isfinite(se2) & (se2 > 0)
     merged["same_verdict"] = merged[f"verdict_{a}"] == merged[f"verdict_{b}"]
     merged["difference"] = merged[f"estimate_{a}"] - merged[f"estimate_{b}"]
-    merged["z"] = np.where(ok, merged["difference"] / np.sqrt(se2.where(ok, 1.0)), math.nan)
-    merged["p"] = np.where(ok, 2 * sps.norm.sf(np.abs(merged["z"].fillna(0.0))), math.nan)
+    merged["t"], merged["df"], merged["p"] = math.nan, math.nan, math.nan
+    if ok.any():
+        (ea, sa, na), (eb, sb, nb) = ([merged.loc[ok, f"{c}_{lab}"].to_numpy(float) for c in ("estimate", "sd", "n")]
+                                      for lab in (a, b))
+        welch = sps.ttest_ind_from_stats(ea, sa, na, eb, sb, nb, equal_var=False)
+        va, vb = sa ** 2 / na, sb ** 2 / nb
+        merged.loc[ok, "t"], merged.loc[ok, "p"] = welch.statistic, welch.pvalue
+        merged.loc[ok, "df"] = (va + vb) ** 2 / (va ** 2 / (na - 1) + vb ** 2 / (nb - 1))
     differ = np.zeros(len(merged), dtype=bool)
     if ok.any():
         differ[ok.to_numpy()] = holm(merged.loc[ok, "p"].to_numpy(), alpha=FAMILY_ALPHA)
@@ -88,7 +98,7 @@ def dependent_word(labels) -> str:
 
 
 def markdown(table: pd.DataFrame, labels=("yade", "lammps")) -> str:
-    """The side-by-side table as Markdown: estimate [90 % interval] and verdict per campaign, the z, the reading."""
+    """The side-by-side table as Markdown: estimate [90 % interval] and verdict per campaign, Welch's t, the reading."""
     a, b = labels
     word = dependent_word(labels)
 
@@ -96,22 +106,23 @@ def markdown(table: pd.DataFrame, labels=("yade", "lammps")) -> str:
         return (f"{r[f'estimate_{lab}']:.3g} [{r[f'low_{lab}']:.3g}, {r[f'high_{lab}']:.3g}] "
                 f"(n {r[f'n_{lab}']:.0f}): **{r[f'verdict_{lab}']}**")
 
-    lines = [f"| claim | {a} | {b} | z of the difference | reading |", "|---|---|---|---|---|"]
+    lines = [f"| claim | {a} | {b} | Welch t of the difference (df) | reading |", "|---|---|---|---|---|"]
     for _, r in table.iterrows():
-        z = "-" if not np.isfinite(r["z"]) else f"{r['z']:+.2f}" + (" (differ, Holm)" if r["estimates_differ"] else "")
+        t = ("-" if not np.isfinite(r["t"]) else f"{r['t']:+.2f} ({r['df']:.0f})"
+             + (" (differ, Holm)" if r["estimates_differ"] else ""))
         if r["same_verdict"]:
             reading = "same verdict"
-        elif not np.isfinite(r["z"]):
-            reading = f"{word} verdict; too few seeds for a z"
+        elif not np.isfinite(r["t"]):
+            reading = f"{word} verdict; too few seeds for a t"
         elif r["estimates_differ"]:
             reading = f"{word}: the estimates differ"
         else:
             reading = f"{word} verdict; the estimates agree within seed noise"
-        lines.append(f"| {r['claim_id']} | {cell(r, a)} | {cell(r, b)} | {z} | {reading} |")
+        lines.append(f"| {r['claim_id']} | {cell(r, a)} | {cell(r, b)} | {t} | {reading} |")
     n_dep = int((~table["same_verdict"]).sum())
     n_diff = int(table["estimates_differ"].sum())
     lines += ["", f"{len(table)} rows; {n_dep} with verdicts that differ ({word}); {n_diff} whose estimates differ at "
-                  f"family-wise {FAMILY_ALPHA:.0%} (Holm over the {int(np.isfinite(table['z']).sum())} rows with a z)."]
+                  f"family-wise {FAMILY_ALPHA:.0%} (Welch's t, Holm over the {int(np.isfinite(table['t']).sum())} rows with a t)."]
     return "\n".join(lines) + "\n"
 
 
