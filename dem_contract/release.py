@@ -59,9 +59,16 @@ BASE_STAGES = ("pack", "preshear")
 #: A contact census of the pre-shear's final state (yade_scripts/contact_census.py), released with the
 #: sidecars where a case has one: the fabric readings and rattlers, which need the state to measure.
 CENSUS = "preshear.census"
-#: The code a DEM result depends on (its last commit is named in the manifest).
-#: lammps_scripts/ runs the same scene under LAMMPS (and imports yade_scripts/' pure modules).
-DEM_CODE = ("yade_scripts", "lammps_scripts", "campaign/scenes.py", "campaign/scene_spec.py")
+#: The code a DEM result depends on, per engine (the last commit that changed it is named in the manifest):
+#: the config -> scene mapping and the engine's stages; lammps_scripts/ runs the same scene under LAMMPS
+#: and imports yade_scripts/' pure modules, so a LAMMPS result depends on both, a YADE result on its own.
+SCENE_CODE = ("campaign/scenes.py", "campaign/scene_spec.py")
+DEM_CODE = {"yade": ("yade_scripts", *SCENE_CODE), "lammps": ("yade_scripts", "lammps_scripts", *SCENE_CODE)}
+
+
+def dem_code(engines) -> list:
+    """The paths whose last change dates the DEM code of a release made by ``engines`` (``DEM_CODE``)."""
+    return sorted({path for engine in engines for path in DEM_CODE[engine]})
 #: Results sub-folders a released case can come from (the campaign's, the bulk study's).
 SOURCES = ("dem", "accuracy/bulk")
 
@@ -356,7 +363,7 @@ def make_release(case_dirs, out, config, command: str, with_states: bool = False
     run_commit : str, optional
         The commit whose code ran the DEM, when the release is made from a later one (a campaign run
         from a pinned worktree): an ancestor of HEAD; ``dem_code_commit`` is then the last commit at or
-        before it that changed ``DEM_CODE``, and the manifest records it as ``run_commit``.
+        before it that changed the engines' ``DEM_CODE``, and the manifest records it as ``run_commit``.
     carry_from : str or Path, optional
         The manifest of the release this one remakes (a copy: the folder is deleted to remake it):
         every top-level block the command does not write (``seeds``, ``republished``, ...) is carried
@@ -447,10 +454,10 @@ def make_release(case_dirs, out, config, command: str, with_states: bool = False
         "code_dirty": bool(git_output("status", "--porcelain", "--untracked-files=no", "--", ".",
                                 *excluded_from_status(out, repo), cwd=repo)),
         **({"run_commit": run_commit} if run_commit else {}),
-        # the last commit that changed the DEM's code (the YADE and LAMMPS stages, the config -> scene mapping),
+        # the last commit that changed the DEM's code (the engines' stages, the config -> scene mapping),
         # at or before the commit that ran the DEM
         "dem_code_commit": git_output("log", "-1", "--format=%H", *([run_commit] if run_commit else []),
-                                      "--", *DEM_CODE, cwd=repo),
+                                      "--", *dem_code(engines), cwd=repo),
         # a YADE release: yade_version alone, as always; else the engine(s) and each one's version
         **({} if engines == ["yade"] else {"engine": engines[0] if len(engines) == 1 else engines}),
         **versions,

@@ -60,3 +60,26 @@ def test_the_summary_gives_each_engines_median_the_paired_ratio_and_the_machines
     assert lam["particle_steps_per_cpu_s"] > 0 and s.loc[("yade", "stage", 1)]["particle_steps_per_cpu_s"] > 0
     assert lam["loadavg_start"] >= 0 and lam["cores"] >= 1
     assert "YADE's (paired" in bench["stdout"] and "load average (1 min)" in bench["stdout"]
+
+
+def tool_module():
+    import importlib.util
+    spec = importlib.util.spec_from_file_location("engine_benchmark_tool", TOOL)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+@pytest.mark.skipif(shutil.which("mpirun") is None or (os.cpu_count() or 1) < 2, reason="needs mpirun and 2 cores")
+def test_two_ranks_run_on_free_cores_and_are_left_out_naming_the_busy_cores():
+    tool = tool_module()
+    cores = os.cpu_count()
+    assert tool.ranks_to_run([1, 2], busy=cores - 2 + 0.4) == ([1, 2], [])
+    run, skipped = tool.ranks_to_run([1, 2], busy=cores - 2 + 0.6)
+    assert run == [1] and skipped == [f"2 ranks: {cores - 2 + 0.6:.2f} of {cores} cores busy leaves fewer than 2 free"]
+    assert tool.ranks_to_run([1, cores + 1], busy=0.0)[1] == [f"{cores + 1} ranks: {cores} cores"]
+
+
+def test_the_busy_cores_are_read_from_the_cpu_times_between_zero_and_all_cores():
+    busy = tool_module().busy_cores(window=0.2)
+    assert 0.0 <= busy <= (os.cpu_count() or 1)

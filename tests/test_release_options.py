@@ -146,9 +146,10 @@ def commit(repo, path, text, message):
     return git(repo, "rev-parse", "HEAD")
 
 
-def test_run_commit_names_the_dem_code_of_the_commit_that_ran_it(yade_case, tmp_path):
-    """History A (DEM code) - B (DEM code) - C (docs), and D (DEM code) on a branch from A: released at C with
-    --run-commit A, dem_code_commit is A and run_commit A; without it, B; D is not HEAD's ancestor: refused."""
+def test_run_commit_names_the_dem_code_of_the_commit_that_ran_it(yade_case, lammps_case, tmp_path):
+    """History A (YADE's stages) - B (LAMMPS's stages) - C (docs), and D (YADE's stages) on a branch from A:
+    released at C with --run-commit A, dem_code_commit is A and run_commit A; without it, a YADE case's is A
+    (B changed LAMMPS's code only), a LAMMPS case's B; D is not HEAD's ancestor: refused."""
     repo = tmp_path / "repo"
     repo.mkdir()
     git(repo, "init", "-q", "-b", "main")
@@ -163,7 +164,9 @@ def test_run_commit_names_the_dem_code_of_the_commit_that_ran_it(yade_case, tmp_
     assert (pinned["code_commit"], pinned["run_commit"], pinned["dem_code_commit"]) == (c, a, a)
     assert list(pinned).index("run_commit") == list(pinned).index("code_dirty") + 1
     plain = release.read_manifest(release.make_release([yade_case], tmp_path / "plain", CONFIGS, "t", repo=repo))
-    assert plain["dem_code_commit"] == b and "run_commit" not in plain     # lammps_scripts/ is DEM code
+    assert plain["dem_code_commit"] == a and "run_commit" not in plain     # lammps_scripts/ is not YADE's code
+    lammps = release.read_manifest(release.make_release([lammps_case], tmp_path / "lammps", CONFIGS, "t", repo=repo))
+    assert lammps["dem_code_commit"] == b                                # ... but LAMMPS's
     with pytest.raises(DEMInputError, match=f"--run-commit {d}: not an ancestor of HEAD"):
         release.make_release([yade_case], tmp_path / "side", CONFIGS, "t", repo=repo, run_commit=d)
     assert not (tmp_path / "side").exists()

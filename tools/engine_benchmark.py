@@ -179,12 +179,31 @@ def bare(scene_path, pack_dir, steps, ranks, work, log):
     return res
 
 
-def ranks_to_run(asked):
+def busy_cores(window=2.0):
+    """Cores busy now: the non-idle share of all CPU time over ``window`` seconds (/proc/stat's
+    ``cpu`` line; idle = idle + iowait), times the cores; the 1-minute load average where
+    /proc/stat is absent. Read while this benchmark waits, so its own runs just before (which
+    the lagging load average still counts for a minute) are not taken for other jobs."""
+    def times():
+        with open("/proc/stat") as f:
+            v = [int(x) for x in f.readline().split()[1:]]
+        return sum(v), v[3] + v[4]
+    try:
+        total0, idle0 = times()
+        time.sleep(window)
+        total1, idle1 = times()
+    except (OSError, ValueError, IndexError):
+        return os.getloadavg()[0]
+    cores = os.cpu_count() or 1
+    return cores * (1.0 - (idle1 - idle0) / max(total1 - total0, 1))
+
+
+def ranks_to_run(asked, busy=None):
     """The asked rank counts this machine can run honestly, and why the others are left out: more
-    than one rank needs mpirun, that many cores, and that many cores free (the 1-minute load average
-    at most cores - ranks + 0.5): on busy cores the ranks mostly wait for each other, and the
-    figure would measure the other jobs, not LAMMPS."""
-    cores, load = os.cpu_count() or 1, os.getloadavg()[0]
+    than one rank needs mpirun, that many cores, and that many cores free (cores busy now,
+    ``busy_cores``, at most cores - ranks + 0.5): on busy cores the ranks mostly wait for each
+    other, and the figure would measure the other jobs, not LAMMPS."""
+    cores = os.cpu_count() or 1
     run, skipped = [], []
     for r in asked:
         if r == 1:
@@ -193,10 +212,12 @@ def ranks_to_run(asked):
             skipped.append(f"{r} ranks: no mpirun")
         elif r > cores:
             skipped.append(f"{r} ranks: {cores} cores")
-        elif load > cores - r + 0.5:
-            skipped.append(f"{r} ranks: load average {load:.2f} on {cores} cores leaves fewer than {r} free")
         else:
-            run.append(r)
+            busy = busy_cores() if busy is None else busy
+            if busy > cores - r + 0.5:
+                skipped.append(f"{r} ranks: {busy:.2f} of {cores} cores busy leaves fewer than {r} free")
+            else:
+                run.append(r)
     return run, skipped
 
 
