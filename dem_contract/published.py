@@ -47,7 +47,7 @@ from pathlib import Path
 import pandas as pd
 import yaml
 
-from .release import MANIFEST, PUBLISHED_DIR, checksum_problems, git_output, read_manifest, sha256
+from .release import MANIFEST, PUBLISHED_DIR, carry_over, checksum_problems, git_output, read_manifest, sha256
 from .series import DEMInputError
 
 #: Relative tolerance for numbers that are not integers (module docstring).
@@ -185,7 +185,9 @@ def republish(release, results, command: str, reason: str) -> list:
     changes (legitimately: a new claim, a float path), they are regenerated
     from the release, and the manifest records when, from which commit, by
     which command and why (``republished``), and their new sha256 and size.
-    The rest of the release is checked first and left as it is.
+    The rest of the release is checked first and left as it is: the manifest's
+    other blocks are carried over verbatim, comments included
+    (``release.carry_over``).
 
     Returns
     -------
@@ -205,6 +207,7 @@ def republish(release, results, command: str, reason: str) -> list:
     for recomputed in tables.values():
         if not recomputed.is_file():
             raise DEMInputError(f"{recomputed}: missing (a table the release publishes)")
+    old_text = (release / MANIFEST).read_text()
     manifest = read_manifest(release)
     for published, recomputed in tables.items():
         shutil.copyfile(recomputed, published)
@@ -215,7 +218,10 @@ def republish(release, results, command: str, reason: str) -> list:
     manifest.setdefault("republished", []).append({
         "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
         "code_commit": commit, "command": command, "reason": reason, "tables": sorted(p.name for p in tables)})
-    (release / MANIFEST).write_text(yaml.safe_dump(manifest, sort_keys=False))
+    # only these blocks are written anew; every other one is carried over as it was written, comments included
+    rewritten = ("files", "total_bytes", "republished")
+    (release / MANIFEST).write_text(carry_over({k: v for k, v in manifest.items() if k in rewritten}, old_text,
+                                               [k for k in manifest if k not in rewritten]))
     return list(tables)
 
 

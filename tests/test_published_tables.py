@@ -99,5 +99,9 @@ def test_republish_replaces_the_tables_and_the_release_still_verifies(tmp_path):
     manifest = yaml.safe_load((copy / "manifest.yaml").read_text())
     assert manifest["republished"][-1]["reason"] == "a test" and "paper_claims.csv" in manifest["republished"][-1][
         "tables"]
+    old_text, new_text = (DECIDE / "manifest.yaml").read_text(), (copy / "manifest.yaml").read_text()
+    for key in ("seeds", "regenerate", "cases"):            # every other block as it was written, comments included
+        assert release.manifest_blocks(new_text)[key] == release.manifest_blocks(old_text)[key]
+    assert "# Every seed planned, run and excluded" in new_text
     assert run_main("dem_contract.__main__", ["published", "--release", copy, "--results", results]).returncode == 0
     assert run_main("dem_contract.__main__", ["published", "--release", DECIDE, "--results", results]).returncode == 1
