@@ -477,6 +477,25 @@ def _model_error_row(sub, diff, margin, floors, seeds_of, cid, claim, source, la
         adequacy=_adequacy_text(ad, NAMES) + " the DEM's ensemble band (MSE - 2N per run, 90 % interval)")
 
 
+def turn_count_interval(k2: int, k1: int, n_runs: int, level: float = stats.LEVEL) -> tuple:
+    r"""The widest difference of two fractions of ``n_runs`` runs (or units) that the counts k2, k1 allow at ``level``.
+
+    Each fraction's exact interval at level :math:`1 - (1 - \mathrm{level})/2` (``stats.clopper_pearson``;
+    Bonferroni over the two, so that both hold together at ``level``), then
+
+    .. math:: [\,p_{2,lo} - p_{1,hi},\; p_{2,hi} - p_{1,lo}\,]
+
+    Zero of 2 runs gives [-0.84, 0.84] at 90 %, zero of 80 runs [-0.045, 0.045]: a zero count bounds a
+    fraction only as tightly as its number of runs does. (NaN, NaN) without runs.
+    """
+    if n_runs == 0:
+        return math.nan, math.nan
+    each = 1.0 - (1.0 - level) / 2
+    _, lo2, hi2, _ = stats.clopper_pearson(k2, n_runs, each)
+    _, lo1, hi1, _ = stats.clopper_pearson(k1, n_runs, each)
+    return lo2 - hi1, hi2 - lo1
+
+
 def turning_row(runs, dem, boot) -> dict:
     """Claim 5: Model 2's theta_A turns opposite to the DEM in some runs, Model 1's does not.
 
@@ -484,6 +503,12 @@ def turning_row(runs, dem, boot) -> dict:
     classified only where its crossing is clear at 5 % over the whole campaign; the others are left out.
     Adequacy: a model lies within the DEM's band when it turns opposite to a run no more often than another
     seed of the same reversal position does (the DEM's own disagreement, among the classified runs).
+
+    The statistic is a difference of two fractions of few runs, often every one zero, whose per-seed bootstrap
+    interval then has zero width whatever the number of runs (two clear runs would read "negligible"). The
+    row's interval is therefore at least as wide as the counts allow (``turn_count_interval``), counted over
+    the units the per-seed means average (a seed's runs of one kind scored by one set: a schedule's several
+    reversals are one unit, as in ``per_seed``), a unit counting as turned where any of its runs turned.
     """
     pairs, missing = _oos(runs)
     tests = crossing_tests(dem)
@@ -492,6 +517,7 @@ def turning_row(runs, dem, boot) -> dict:
         if c["axis"] != "unclear":
             by_pos.setdefault((group, proto), {})[case] = c["axis"]
     diffs, count, n_runs, excess = {}, {m: 0 for m in MODELS}, 0, {m: {} for m in MODELS}
+    turned = {m: {} for m in MODELS}   # per unit of the per-seed means (seed, set, kind): any opposite turn
     for key, cur in pairs:
         st, case, group, proto, _ = key
         ref = by_pos.get((group, proto), {}).get(case)
@@ -507,10 +533,16 @@ def turning_row(runs, dem, boot) -> dict:
                                   noisy=False)["axis"]
             opp[m] = float(ax in ("90", "0/180") and ax != ref)
             count[m] += int(opp[m])
-            _add(excess[m], case, (st, kind_of(cur["dem"])), opp[m] - own)
+            unit = (case, st, kind_of(cur["dem"]))
+            turned[m][unit] = turned[m].get(unit, False) or bool(opp[m])
+            _add(excess[m], case, unit[1:], opp[m] - own)
         _add(diffs, case, (st, kind_of(cur["dem"])), opp["model2"] - opp["model1"])
     _, v = per_seed(diffs)
     est, lo, hi, n = boot(v)
+    count_lo, count_hi = turn_count_interval(sum(turned["model2"].values()), sum(turned["model1"].values()),
+                                             len(turned["model1"]))
+    if np.isfinite(lo) and np.isfinite(hi):
+        lo, hi = min(lo, count_lo), max(hi, count_hi)
     ad = {m: adequacy(per_seed(excess[m])[1], boot) for m in MODELS}
     return _row(
         "5", "Model 2's theta_A turns the opposite way in some cases, Model 1's does not", "the paper, Sec. 4",
@@ -520,7 +552,9 @@ def turning_row(runs, dem, boot) -> dict:
         "fraction of runs", 0.0, ">", est, lo, hi,
         "paired " + stats.bootstrap_test_name(boot.n_resamples), n, SEED_UNIT,
         f"opposite to the DEM: Model 1 in {count['model1']} of {n_runs} runs, Model 2 in {count['model2']} of "
-        f"{n_runs} (DEM runs clear at family-wise 5 %: {sum(len(x) for x in by_pos.values())} of {len(tests)}); "
+        f"{n_runs} (DEM runs clear at family-wise 5 %: {sum(len(x) for x in by_pos.values())} of {len(tests)}; "
+        f"the Clopper-Pearson bound of the counts over {len(turned['model1'])} seed-set-kind units "
+        f"[{count_lo:.3g}, {count_hi:.3g}]); "
         f"{_oos_detail(pairs, missing)}", verdict=_decide(est, lo, hi, 0.0, ">", margins.TURN_FRACTION, ad),
         margin=margins.TURN_FRACTION, sd=_sd(v),
         adequacy=_adequacy_text(ad, NAMES) + " the DEM's own disagreement between seeds (opposite turns minus "
