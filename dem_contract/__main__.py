@@ -124,7 +124,9 @@ def run(args) -> int:
             f"python -m dem_contract republish --release {args.release} --results {args.results}"
         tables = published.republish(args.release, args.results, command, args.reason)
         print(f"dem_contract republish: {', '.join(p.name for p in tables)} in {args.release}/published, "
-              f"from {args.results}")
+              f"from {args.results}" if tables else
+              f"dem_contract republish: every table of {args.release}/published agrees with {args.results}: "
+              "nothing written")
     else:
         out = release.restore_case(args.release, args.case, args.out)
         print(f"dem_contract restore: {args.case} from {args.release} -> {out}")

@@ -192,7 +192,8 @@ def republish(release, results, command: str, reason: str) -> list:
     Returns
     -------
     list of Path
-        The tables written.
+        The tables written: those that differ from their recomputation (``compare_table``); the
+        others keep their bytes, and with none differing nothing is written.
 
     Raises
     ------
@@ -207,6 +208,10 @@ def republish(release, results, command: str, reason: str) -> list:
     for recomputed in tables.values():
         if not recomputed.is_file():
             raise DEMInputError(f"{recomputed}: missing (a table the release publishes)")
+    # a table that agrees with its recomputation (numbers to RTOL) keeps its bytes: only what changed is replaced
+    tables = {pub: rec for pub, rec in tables.items() if compare_table(pub, rec)}
+    if not tables:
+        return []
     old_text = (release / MANIFEST).read_text()
     manifest = read_manifest(release)
     for published, recomputed in tables.items():

@@ -78,6 +78,15 @@ def test_a_published_row_missing_from_the_recomputation_is_named_and_an_added_ro
     assert problems == [f"{tmp_path / 'results' / 'claims' / 'paper_claims.csv'}: published row claim_id=10 missing"]
 
 
+def test_republishing_a_recomputation_that_agrees_writes_nothing(tmp_path):
+    copy = tmp_path / "bulk-decide"
+    shutil.copytree(DECIDE, copy)
+    results = recomputed(tmp_path)
+    done = run_main("dem_contract.__main__", ["republish", "--release", copy, "--results", results, "--reason", "x"])
+    assert done.returncode == 0 and "nothing written" in done.stdout
+    assert (copy / "manifest.yaml").read_bytes() == (DECIDE / "manifest.yaml").read_bytes()
+
+
 def test_numbers_in_text_agree_across_their_rounding():
     """Claim 10's text printed 198 from the published run and 197 from the recomputation (3 digits of 197.5)."""
     assert published.cells_agree("149 [101, 198]; X_hi = 0.09245", "149 [101, 197]; X_hi = 0.09245")
@@ -97,8 +106,8 @@ def test_republish_replaces_the_tables_and_the_release_still_verifies(tmp_path):
     assert (copy / "published" / "paper_claims.csv").read_bytes() == \
         (results / "claims" / "paper_claims.csv").read_bytes()
     manifest = yaml.safe_load((copy / "manifest.yaml").read_text())
-    assert manifest["republished"][-1]["reason"] == "a test" and "paper_claims.csv" in manifest["republished"][-1][
-        "tables"]
+    assert manifest["republished"][-1]["reason"] == "a test" and manifest["republished"][-1]["tables"] == [
+        "paper_claims.csv"]                                   # the one table that changed; the others keep their bytes
     old_text, new_text = (DECIDE / "manifest.yaml").read_text(), (copy / "manifest.yaml").read_text()
     for key in ("seeds", "regenerate", "cases"):            # every other block as it was written, comments included
         assert release.manifest_blocks(new_text)[key] == release.manifest_blocks(old_text)[key]
