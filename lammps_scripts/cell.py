@@ -30,8 +30,13 @@ WALL_FORCES = "wallforce"  # fix store/force on the walls
 
 
 def header(lmp):
-    """The session's settings before any atom: SI units, 2D disks, periodic in x."""
-    for c in ("units si", "dimension 2", "atom_style sphere", "atom_modify map array",
+    """The session's settings before any atom: SI units, 2D disks, periodic in x.
+
+    On several MPI ranks the cell is cut along x only (`processors * 1 1`): the box is taller than the
+    packed layer (room for the loose packing above it), so LAMMPS's own choice, a cut across the longer
+    side, put every disk of a W = 4H cell on one rank and left the other idle. One rank: no effect.
+    """
+    for c in ("units si", "dimension 2", "processors * 1 1", "atom_style sphere", "atom_modify map array",
               "boundary p f p", "comm_modify vel yes", "newton off"):
         lmp.command(c)
 
