@@ -6,6 +6,7 @@ steps on each rank count the machine has, with LAMMPS's own timer shares.
 Two pairs of a pre-shear of 0.02 strain (about 700 steps) on the H = 8d cell (211 disks); about 30 s.
 """
 import os
+import re
 import shutil
 
 import pandas as pd
@@ -24,7 +25,8 @@ def bench(tmp_path_factory):
     r = yade(TOOL, "--out", out, "--work", root / "work", "--cells", "tiny", "--pairs", 2, "--strain", 0.02,
              "--ranks", "1,2")
     assert r.returncode == 0, r.stdout[-2000:] + r.stderr[-2000:]
-    return dict(out=out, stdout=r.stdout, runs=pd.read_csv(out), summary=pd.read_csv(root / "engine_throughput_summary.csv"))
+    return dict(out=out, stdout=r.stdout, runs=pd.read_csv(out), summary=pd.read_csv(root / "engine_throughput_summary.csv"),
+                work=root / "work" / "tiny")
 
 
 def test_pairs_run_both_engines_over_the_same_disks_and_steps_in_alternating_order(bench):
@@ -83,3 +85,18 @@ def test_two_ranks_run_on_free_cores_and_are_left_out_naming_the_busy_cores():
 def test_the_busy_cores_are_read_from_the_cpu_times_between_zero_and_all_cores():
     busy = tool_module().busy_cores(window=0.2)
     assert 0.0 <= busy <= (os.cpu_count() or 1)
+
+
+@pytest.mark.skipif(shutil.which("mpirun") is None, reason="needs mpirun")
+def test_on_two_ranks_each_rank_holds_part_of_the_layer(bench):
+    """The box is taller than the packed layer: cut across y (LAMMPS's own choice for a taller box), one rank
+    held every disk and the other none; the cell is cut along x (lammps_scripts/cell.py: processors * 1 1).
+    A correctness check, not a timing: it runs whether or not 2 cores are free."""
+    work = bench["work"]
+    with open(work / "bare_two_ranks.log", "w") as log:
+        tool_module().bare(str(work / "scene_lammps.json"), str(work / "lammps" / "pack"), 50, 2,
+                           str(work / "two_ranks"), log)
+    text = (work / "two_ranks" / "bare_2" / "log.lammps").read_text()
+    assert "1 by 2 by 1 MPI processor grid" not in text and "2 by 1 by 1 MPI processor grid" in text
+    ave, most, least = re.search(r"Nlocal:\s+([0-9.]+) ave\s+([0-9]+) max\s+([0-9]+) min", text).groups()
+    assert int(least) > 0.3 * float(ave) and int(most) < 1.7 * float(ave), (ave, most, least)
