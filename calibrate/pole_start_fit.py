@@ -52,6 +52,7 @@ from model.pole_start import (DELTA_MIN, FORMAT_TAG, KEYS, block_params, far_pol
 
 from . import curves_fit, curves_integration, fits, profiles
 from .curves_integration import FAILURES, CurvesOptions, CurvesSettings
+from .settings import Settings
 
 SCALE = np.array([1.0, 10.0, 1e3, 1.0, 10.0, 1e3, 0.01])
 DELTA_MAX = 0.4
@@ -372,8 +373,6 @@ def budget(calibrate_options: list[str]) -> tuple[int, int]:
 
 
 def main(argv=None) -> int:
-    from .settings import Settings
-
     ap = argparse.ArgumentParser(prog="python -m calibrate.pole_start_fit", description=__doc__.split("\n\n")[0])
     ap.add_argument("--dem", nargs="+", required=True, help="DEM case directories the set is calibrated on")
     ap.add_argument("--params", required=True, help="the set's params.yaml (its Eq. 2 and Model 1 start)")

@@ -68,7 +68,8 @@ def across(first: pd.DataFrame, second: pd.DataFrame, labels=("yade", "lammps"))
     DataFrame
         ``claim_id``, ``<label>_estimate``, ``_low``, ``_high``, ``_n``, ``_verdict`` for each label,
         ``same_verdict``, ``difference`` (first - second), Welch's ``t``, its degrees of freedom ``df``,
-        ``p`` (two-sided), ``estimates_differ`` (Holm at family-wise ``FAMILY_ALPHA`` over the rows with a t), in the first table's row order.
+        ``p`` (two-sided), ``estimates_differ`` (Holm at family-wise ``FAMILY_ALPHA`` over the rows with a t),
+        in the first table's row order.
     """
     a, b = labels
     keep = ["claim_id", "estimate", "low", "high", "sd", "n", "verdict"]
@@ -78,16 +79,15 @@ def across(first: pd.DataFrame, second: pd.DataFrame, labels=("yade", "lammps"))
     merged["same_verdict"] = merged[f"verdict_{a}"] == merged[f"verdict_{b}"]
     merged["difference"] = merged[f"estimate_{a}"] - merged[f"estimate_{b}"]
     merged["t"], merged["df"], merged["p"] = math.nan, math.nan, math.nan
+    differ = np.zeros(len(merged), dtype=bool)
     if ok.any():
         (ea, sa, na), (eb, sb, nb) = ([merged.loc[ok, f"{c}_{lab}"].to_numpy(float) for c in ("estimate", "sd", "n")]
                                       for lab in (a, b))
         welch = sps.ttest_ind_from_stats(ea, sa, na, eb, sb, nb, equal_var=False)
-        va, vb = sa ** 2 / na, sb ** 2 / nb
+        va, vb = sa ** 2 / na, sb ** 2 / nb     # scipy's result does not carry its Welch-Satterthwaite df
         merged.loc[ok, "t"], merged.loc[ok, "p"] = welch.statistic, welch.pvalue
         merged.loc[ok, "df"] = (va + vb) ** 2 / (va ** 2 / (na - 1) + vb ** 2 / (nb - 1))
-    differ = np.zeros(len(merged), dtype=bool)
-    if ok.any():
-        differ[ok.to_numpy()] = holm(merged.loc[ok, "p"].to_numpy(), alpha=FAMILY_ALPHA)
+        differ[ok.to_numpy()] = holm(welch.pvalue, alpha=FAMILY_ALPHA)
     merged["estimates_differ"] = differ
     return merged.drop(columns=[f"sd_{a}", f"sd_{b}"])
 

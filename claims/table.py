@@ -526,17 +526,16 @@ def turning_row(runs, dem, boot) -> dict:
         n_runs += 1
         others = [a for c, a in by_pos[(group, proto)].items() if c != case]
         own = float(np.mean([a != ref for a in others])) if others else math.nan
-        opp = {}
+        opp, group_key = {}, (st, kind_of(cur["dem"]))   # the run's group within its seed (per_seed)
         for m in MODELS:
             c = cur[m]
             ax = measures.passage(c["s_rev"].to_numpy(), c["A_xx"].to_numpy(), c["A_xy"].to_numpy(),
                                   noisy=False)["axis"]
             opp[m] = float(ax in ("90", "0/180") and ax != ref)
             count[m] += int(opp[m])
-            unit = (case, st, kind_of(cur["dem"]))
-            turned[m][unit] = turned[m].get(unit, False) or bool(opp[m])
-            _add(excess[m], case, unit[1:], opp[m] - own)
-        _add(diffs, case, (st, kind_of(cur["dem"])), opp["model2"] - opp["model1"])
+            turned[m][(case, *group_key)] = turned[m].get((case, *group_key), False) or bool(opp[m])
+            _add(excess[m], case, group_key, opp[m] - own)
+        _add(diffs, case, group_key, opp["model2"] - opp["model1"])
     _, v = per_seed(diffs)
     est, lo, hi, n = boot(v)
     count_lo, count_hi = turn_count_interval(sum(turned["model2"].values()), sum(turned["model1"].values()),

@@ -64,13 +64,13 @@ CENSUS = "preshear.census"
 #: and imports yade_scripts/' pure modules, so a LAMMPS result depends on both, a YADE result on its own.
 SCENE_CODE = ("campaign/scenes.py", "campaign/scene_spec.py")
 DEM_CODE = {"yade": ("yade_scripts", *SCENE_CODE), "lammps": ("yade_scripts", "lammps_scripts", *SCENE_CODE)}
+#: Results sub-folders a released case can come from (the campaign's, the bulk study's).
+SOURCES = ("dem", "accuracy/bulk")
 
 
 def dem_code(engines) -> list:
     """The paths whose last change dates the DEM code of a release made by ``engines`` (``DEM_CODE``)."""
     return sorted({path for engine in engines for path in DEM_CODE[engine]})
-#: Results sub-folders a released case can come from (the campaign's, the bulk study's).
-SOURCES = ("dem", "accuracy/bulk")
 
 
 def sha256(path) -> str:

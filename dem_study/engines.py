@@ -253,6 +253,7 @@ def agreement_table(pairs: pd.DataFrame, curves: dict, early_strain: float, matc
     reference = pairs.loc[pairs["reference"].fillna("") == "", "cell"].iloc[0]
     ref = by_cell.loc[reference]
     zf = family_z()
+    cut = early(curves, early_strain)
     rows = []
     for other, row in by_cell.drop(index=reference).iterrows():
         for q in bulk.STEADY:
@@ -263,7 +264,6 @@ def agreement_table(pairs: pd.DataFrame, curves: dict, early_strain: float, matc
                          f"{other}_mean": row[q], f"{other}_se": row[f"{q}_se"], f"{other}_seeds": int(row["seeds"]),
                          "difference": float(row[f"d_{q}"]), "z": z,
                          "agrees": bool(abs(z) <= match_se), "agrees_family": bool(abs(z) <= zf)})
-        cut = early(curves, early_strain)
         for q in bulk.TRANSIENT:
             rms, noise = float(row[f"transient_{q}_rms"]), float(row[f"transient_{q}_noise"])
             d = (angle_difference(cut[other][q].to_numpy(), cut[reference][q].to_numpy()) if q in bulk.AXIAL
